@@ -1,0 +1,121 @@
+"""Typed, frozen configuration of a crowd world. Every field carries its unit."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+KINEMATICS = ("holonomic", "unicycle")
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """The paper's reward (§Reward Function Design). Terms are reported by name in ``info["reward_terms"]``."""
+
+    success: float = 10.0
+    """Reward when the goal distance is ≤ ``goal_tolerance`` [-]."""
+    collision: float = -20.0
+    """Reward when the robot touches a pedestrian or an obstacle during the step [-]."""
+    discomfort_dist: float = 0.25
+    """Surface-to-surface distance below which the discomfort penalty applies [m]."""
+    discomfort_scale: float = 10.0
+    """Penalty is ``discomfort_scale * (d_min - discomfort_dist)`` for ``0 < d_min < discomfort_dist`` [1/m]."""
+    progress_scale: float = 4.0
+    """Otherwise ``progress_scale * (previous - current goal distance)`` [1/m]."""
+    time_penalty: float = -0.025
+    """Added on every step [-]."""
+    goal_tolerance: float = 0.3
+    """Success when the robot centre is within this distance of its goal [m]."""
+
+
+@dataclass(frozen=True)
+class WorldConfig:
+    """Geometry, timing and sensing of a batch of crowd worlds.
+
+    All worlds of a batch share one config. Unknown keys are an error (see :func:`make_config`).
+    """
+
+    num_humans: int = 20
+    """Pedestrians per world [-]. ``humans_range`` overrides it with a per-episode draw."""
+    humans_range: tuple[int, int] | None = None
+    """If set, each episode draws its pedestrian count uniformly from ``[lo, hi]`` (inclusive) [-]."""
+    max_humans_observed: int = 30
+    """``N_max``: the robot observation is padded (or cut, nearest first) to this many pedestrians [-]."""
+    time_step: float = 0.25
+    """Simulation step [s]."""
+    time_limit: float = 50.0
+    """Episode truncation time [s]."""
+    robot_radius: float = 0.3
+    """[m]"""
+    human_radius: float = 0.3
+    """[m]"""
+    robot_v_pref: float = 1.0
+    """Robot preferred (and maximum) speed [m/s]."""
+    human_v_pref: float = 1.0
+    """Pedestrian preferred (and maximum) speed [m/s]."""
+    sensing_range: float = 5.0
+    """Robot sensing range: pedestrians whose centre is farther are not observed [m]."""
+    human_sensing_range: float = 5.0
+    """Range of each pedestrian's own observation of its neighbours [m]."""
+    kinematics: str = "holonomic"
+    """``"holonomic"`` (action = planar velocity, clipped to v_pref) or ``"unicycle"`` (action = (v, ω))."""
+    max_angular_speed: float = math.pi
+    """Unicycle turn-rate limit [rad/s]."""
+    robot_visible: bool = True
+    """If False the robot is invisible to pedestrian models (CrowdNav's ``robot.visible = False``)."""
+    arena_walls: bool = False
+    """Surround the layout's arena with four wall segments."""
+    obstacles: tuple[tuple[tuple[float, float], ...], ...] = ()
+    """Extra static obstacles: each a vertex list; 2 vertices = a wall segment, ≥ 3 = a closed polygon [m]."""
+    reward: RewardConfig = field(default_factory=RewardConfig)
+
+    def __post_init__(self) -> None:
+        if self.kinematics not in KINEMATICS:
+            raise ValueError(f"kinematics={self.kinematics!r}; valid choices: {', '.join(KINEMATICS)}")
+        positive = ("time_step", "time_limit", "robot_radius", "human_radius", "robot_v_pref", "human_v_pref",
+                    "sensing_range", "human_sensing_range", "max_angular_speed")
+        for name in positive:
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
+        if self.num_humans < 0:
+            raise ValueError(f"num_humans must be ≥ 0, got {self.num_humans}")
+        if self.max_humans_observed < 1:
+            raise ValueError(f"max_humans_observed must be ≥ 1, got {self.max_humans_observed}")
+        if self.humans_range is not None:
+            lo, hi = self.humans_range
+            if not 0 <= lo <= hi:
+                raise ValueError(f"humans_range must satisfy 0 ≤ lo ≤ hi, got {self.humans_range}")
+        for k, poly in enumerate(self.obstacles):
+            if len(poly) < 2:
+                raise ValueError(f"obstacles[{k}] needs ≥ 2 vertices, got {len(poly)}")
+
+    @property
+    def max_humans(self) -> int:
+        """Pedestrian slots per world (the padded array size ``H``)."""
+        return self.humans_range[1] if self.humans_range is not None else self.num_humans
+
+    @property
+    def max_steps(self) -> int:
+        """Steps before truncation: ``ceil(time_limit / time_step)``."""
+        return math.ceil(self.time_limit / self.time_step - 1e-9)
+
+
+def make_config(**kwargs: Any) -> WorldConfig:
+    """Build a :class:`WorldConfig`, rejecting unknown keys with the list of valid ones."""
+    valid = {f.name for f in dataclasses.fields(WorldConfig)}
+    unknown = sorted(set(kwargs) - valid)
+    if unknown:
+        raise TypeError(f"unknown world option(s) {unknown}; valid options: {', '.join(sorted(valid))}")
+    if isinstance(kwargs.get("reward"), dict):
+        rvalid = {f.name for f in dataclasses.fields(RewardConfig)}
+        bad = sorted(set(kwargs["reward"]) - rvalid)
+        if bad:
+            raise TypeError(f"unknown reward option(s) {bad}; valid options: {', '.join(sorted(rvalid))}")
+        kwargs["reward"] = RewardConfig(**kwargs["reward"])
+    if "obstacles" in kwargs:
+        kwargs["obstacles"] = tuple(tuple((float(x), float(y)) for x, y in poly) for poly in kwargs["obstacles"])
+    if kwargs.get("humans_range") is not None:
+        kwargs["humans_range"] = tuple(int(v) for v in kwargs["humans_range"])
+    return WorldConfig(**kwargs)

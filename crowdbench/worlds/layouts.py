@@ -1,0 +1,260 @@
+"""Crowd layouts: where the robot and the pedestrians start, where they go, and what replaces a reached goal.
+
+A layout is a plug-in: subclass :class:`Layout`, implement :meth:`Layout.candidates` and :meth:`Layout.renew_goals`,
+and register it with :func:`register`. Placement is bounded (see :func:`place_without_overlap`): a layout that cannot
+fit the requested crowd raises ``ValueError`` instead of looping forever.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Sequence
+from typing import ClassVar
+
+import numpy as np
+
+from crowdbench.geometry import Polygon, obstacle_edges, point_segment_distance
+from crowdbench.registry import Registry
+
+LAYOUTS: Registry[Layout] = Registry("layout", "crowdbench.layouts")
+register = LAYOUTS.register
+
+PLACEMENT_GAP = 0.2
+"""Extra clearance between any two start positions (and any two goals) at placement [m] (CrowdNav's discomfort_dist)."""
+
+
+class Layout(ABC):
+    """Geometry of one crowd scenario.
+
+    Class attributes:
+        name: Registry name.
+        robot_start, robot_goal: Robot start and goal [m].
+        half_size: Half-width of the square arena used for walls, rendering and wandering [m].
+    """
+
+    name: ClassVar[str] = ""
+    robot_start: tuple[float, float] = (0.0, -6.0)
+    robot_goal: tuple[float, float] = (0.0, 6.0)
+    half_size: float = 7.0
+
+    def obstacles(self) -> tuple[Polygon, ...]:
+        """Static obstacles of the layout (vertex lists, metres); none by default."""
+        return ()
+
+    @abstractmethod
+    def candidates(self, rng: np.random.Generator, index: int, n: int, m: int) -> tuple[np.ndarray, np.ndarray]:
+        """Draw ``m`` candidate (start, goal) pairs for pedestrian ``index`` of ``n``: two ``(m, 2)`` arrays [m]."""
+
+    @abstractmethod
+    def renew_goals(self, rng: np.random.Generator, positions: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """New goals ``(k, 2)`` for ``k`` pedestrians at ``positions`` ``(k, 2)`` that reached ``goals`` ``(k, 2)``."""
+
+    def sample(
+        self,
+        rng: np.random.Generator,
+        n: int,
+        human_radius: float,
+        robot_radius: float,
+        obstacles: Sequence[Polygon] = (),
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Place ``n`` pedestrians without overlap; returns ``(starts, goals)``, each ``(n, 2)`` [m]."""
+        return place_without_overlap(self, rng, n, human_radius, robot_radius, obstacles)
+
+
+def _inside_polygons(points: np.ndarray, obstacles: Sequence[Polygon]) -> np.ndarray:
+    """Even-odd test: True where a point ``(m, 2)`` lies inside any closed polygon (≥ 3 vertices)."""
+    inside = np.zeros(len(points), dtype=bool)
+    for poly in obstacles:
+        if len(poly) < 3:
+            continue
+        v = np.asarray(poly, dtype=np.float64)
+        w = np.roll(v, -1, axis=0)
+        x, y = points[:, None, 0], points[:, None, 1]
+        cond = (v[None, :, 1] > y) != (w[None, :, 1] > y)
+        xint = v[None, :, 0] + (y - v[None, :, 1]) * (w[None, :, 0] - v[None, :, 0]) / np.where(
+            w[None, :, 1] != v[None, :, 1], w[None, :, 1] - v[None, :, 1], 1.0)
+        inside ^= (cond & (x < xint)).sum(axis=1) % 2 == 1
+    return inside
+
+
+def place_without_overlap(
+    layout: Layout,
+    rng: np.random.Generator,
+    n: int,
+    human_radius: float,
+    robot_radius: float,
+    obstacles: Sequence[Polygon] = (),
+    pool: int = 24,
+    rounds: int = 12,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Greedy bounded dart-throwing.
+
+    Pedestrian ``i`` takes the first of ``pool`` vectorised candidates whose start is clear of every accepted start,
+    the robot's start and goal, and the obstacles, and whose goal is clear of every accepted goal and the robot's
+    start and goal (clearance: radii + :data:`PLACEMENT_GAP`). After ``rounds`` pools without success it raises
+    ``ValueError`` — at most ``n * pool * rounds`` candidates are ever drawn.
+    """
+    starts = np.empty((n, 2))
+    goals = np.empty((n, 2))
+    robot_pts = np.array([layout.robot_start, layout.robot_goal], dtype=np.float64)
+    d_hh = 2 * human_radius + PLACEMENT_GAP
+    d_hr = human_radius + robot_radius + PLACEMENT_GAP
+    edges = obstacle_edges(obstacles)
+    for i in range(n):
+        for _ in range(rounds):
+            s, g = layout.candidates(rng, i, n, pool)
+            ok = np.ones(pool, dtype=bool)
+            for pts, acc in ((s, starts[:i]), (g, goals[:i])):
+                ok &= (np.linalg.norm(pts[:, None] - robot_pts[None], axis=-1) >= d_hr).all(axis=1)
+                if i:
+                    ok &= (np.linalg.norm(pts[:, None] - acc[None], axis=-1) >= d_hh).all(axis=1)
+            if len(edges):
+                for pts in (s, g):
+                    clear = point_segment_distance(pts[:, None], edges[None, :, 0], edges[None, :, 1])
+                    ok &= (clear >= human_radius + PLACEMENT_GAP).all(axis=1) & ~_inside_polygons(pts, obstacles)
+            hits = np.flatnonzero(ok)
+            if len(hits):
+                starts[i], goals[i] = s[hits[0]], g[hits[0]]
+                break
+        else:
+            raise ValueError(
+                f"layout {layout.name!r} cannot fit num_humans={n} pedestrians of radius {human_radius} m: "
+                f"pedestrian {i} found no free start/goal in {pool * rounds} candidates; lower num_humans")
+    return starts, goals
+
+
+@register("circle_crossing")
+class CircleCrossing(Layout):
+    """Training layout. Pedestrians start on a circle of radius ``radius`` (6 m) centred at the origin, each
+    coordinate perturbed by U(-noise, noise) (0.5 m); goals are antipodal (``goal = -start``). The robot crosses from
+    (0, -6) to (0, 6). A pedestrian reaching its goal is sent to a new point on the circle at a uniformly random angle
+    within ±45° of the antipode of where it stands, so the centre stays busy all episode.
+    """
+
+    name = "circle_crossing"
+
+    def __init__(self, radius: float = 6.0, noise: float = 0.5) -> None:
+        self.radius, self.noise = radius, noise
+        self.half_size = radius + 1.0
+
+    def candidates(self, rng, index, n, m):
+        ang = rng.uniform(0.0, 2 * math.pi, m)
+        s = self.radius * np.stack([np.cos(ang), np.sin(ang)], 1) + rng.uniform(-self.noise, self.noise, (m, 2))
+        return s, -s
+
+    def renew_goals(self, rng, positions, goals):
+        ang = np.arctan2(-positions[:, 1], -positions[:, 0]) + rng.uniform(-math.pi / 4, math.pi / 4, len(positions))
+        return self.radius * np.stack([np.cos(ang), np.sin(ang)], 1) + rng.uniform(
+            -self.noise, self.noise, (len(positions), 2))
+
+
+@register("square_crossing")
+class SquareCrossing(Layout):
+    """CrowdNav's square crossing. Each pedestrian picks a side s = ±1 at random, starts uniformly in the half
+    ``x ∈ s·[0, w/2], y ∈ [-w/2, w/2]`` of a ``w`` = 10 m square and aims at a uniform point of the opposite half.
+    A reached goal is replaced by a uniform point of the half opposite to where the pedestrian stands.
+    """
+
+    name = "square_crossing"
+
+    def __init__(self, width: float = 10.0) -> None:
+        self.width = width
+        self.half_size = max(width / 2, 6.0) + 1.0
+
+    def _half(self, rng, sign: np.ndarray) -> np.ndarray:
+        m = len(sign)
+        return np.stack([rng.uniform(0, self.width / 2, m) * sign, rng.uniform(-self.width / 2, self.width / 2, m)], 1)
+
+    def candidates(self, rng, index, n, m):
+        sign = np.where(rng.random(m) > 0.5, -1.0, 1.0)
+        return self._half(rng, sign), self._half(rng, -sign)
+
+    def renew_goals(self, rng, positions, goals):
+        return self._half(rng, np.where(positions[:, 0] >= 0, -1.0, 1.0))
+
+
+class _Streams(Layout):
+    """Pedestrians enter in bands along the arena boundary and walk to the opposite boundary; on arrival they turn
+    round (the new goal is the mirror of the reached one), so density holds. Band depth grows with the crowd so the
+    band can always hold its share.
+    """
+
+    half_size = 6.0
+    lane_half_width = 3.5
+
+    def _depth(self, n_stream: int) -> float:
+        return float(min(self.half_size, max(2.0, 2.0 * n_stream * 0.8**2 / (2 * self.lane_half_width))))
+
+    def _stream(self, index: int, n: int) -> tuple[np.ndarray, np.ndarray, int]:
+        """(entry direction unit vector, lane axis unit vector, pedestrians in this stream)."""
+        raise NotImplementedError
+
+    def candidates(self, rng, index, n, m):
+        direction, lane, k = self._stream(index, n)
+        depth = self._depth(k)
+        along = -self.half_size + rng.uniform(0, depth, m)
+        across = rng.uniform(-self.lane_half_width, self.lane_half_width, m)
+        s = along[:, None] * direction + across[:, None] * lane
+        g = self.half_size * direction + across[:, None] * lane
+        return s, np.broadcast_to(g, s.shape).copy()
+
+    def renew_goals(self, rng, positions, goals):
+        return -goals
+
+
+@register("intersection")
+class Intersection(_Streams):
+    """Test-only. Two orthogonal streams in a 12 m arena: even-indexed pedestrians walk west→east in the band
+    ``|y| ≤ 3.5`` m, odd-indexed ones north→south in the band ``|x| ≤ 3.5`` m, each entering from its boundary;
+    the robot crosses both from (0, -6) to (0, 6).
+    """
+
+    name = "intersection"
+
+    def _stream(self, index, n):
+        if index % 2 == 0:
+            return np.array([1.0, 0.0]), np.array([0.0, 1.0]), (n + 1) // 2
+        return np.array([0.0, -1.0]), np.array([1.0, 0.0]), n // 2
+
+
+@register("split_flow")
+class SplitFlow(_Streams):
+    """Test-only. Opposing horizontal traffic: even-indexed pedestrians enter from the west boundary and walk east,
+    odd-indexed ones from the east walking west, all in the band ``|y| ≤ 3.5`` m; the robot crosses the flow from
+    (0, -6) to (0, 6).
+    """
+
+    name = "split_flow"
+
+    def _stream(self, index, n):
+        if index % 2 == 0:
+            return np.array([1.0, 0.0]), np.array([0.0, 1.0]), (n + 1) // 2
+        return np.array([-1.0, 0.0]), np.array([0.0, 1.0]), n // 2
+
+
+@register("random_wander")
+class RandomWander(Layout):
+    """Test-only. Starts and goals uniform over the square ``[-a, a]²`` (a = 5.5 m); a reached goal is replaced by
+    another uniform point of that square.
+    """
+
+    name = "random_wander"
+    half_size = 6.0
+
+    def __init__(self, extent: float = 5.5) -> None:
+        self.extent = extent
+
+    def _uniform(self, rng, m: int) -> np.ndarray:
+        return rng.uniform(-self.extent, self.extent, (m, 2))
+
+    def candidates(self, rng, index, n, m):
+        return self._uniform(rng, m), self._uniform(rng, m)
+
+    def renew_goals(self, rng, positions, goals):
+        return self._uniform(rng, len(positions))
+
+
+def make_layout(name: str | Layout, **kwargs) -> Layout:
+    """Resolve a layout by registry name (or pass an instance through)."""
+    return name if isinstance(name, Layout) else LAYOUTS.make(name, **kwargs)

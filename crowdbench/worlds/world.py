@@ -1,0 +1,287 @@
+"""The batched crowd world: ``B`` independent worlds stepped together, each with one robot and ``H`` pedestrians.
+
+State lives in arrays shaped ``(B, A, ...)`` with ``A = 1 + H``; agent 0 is the robot. The simulation core knows
+nothing of PettingZoo, Gymnasium or rsl-rl: the environments in :mod:`crowdbench.envs` are thin views over it.
+
+Physics scheme (see README, "Physics"):
+
+* Each world owns a :class:`pymunk.Space` holding the static obstacles (segments, polygons) and one KINEMATIC
+  circle body per agent. pymunk integrates the motion (``p ← p + v·dt``) and answers spatial queries
+  (:meth:`CrowdWorld.space`). Bodies are synchronised through ``pymunk.batch`` in one call per world, never per agent.
+* Collisions follow CrowdNav's semantics — *detected, not resolved*: agents are velocity-controlled and do not push
+  each other. The robot collides when its disc touches a pedestrian's or an obstacle's at any time within the step
+  (swept test, closest approach of the two linear motions); pedestrian–pedestrian overlaps are counted in the info.
+* Nothing passes through an obstacle: before pymunk integrates, every agent's displacement is cut at its time of
+  impact with the static edges (vectorised continuous collision detection), so a disc stops at contact. This avoids
+  the dynamic-body pitfall where velocity control lets discs tunnel at dt = 0.25 s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pymunk
+
+from crowdbench.config import WorldConfig
+from crowdbench.geometry import norm, obstacle_edges, swept_pair_min_distance, swept_segment_fraction
+from crowdbench.humans.base import CrowdState, HumanModel, make
+from crowdbench.worlds.layouts import Layout, make_layout
+from crowdbench.worlds.physics import PymunkWorlds
+
+RUNNING, SUCCESS, COLLISION, TIMEOUT = 0, 1, 2, 3
+OUTCOMES = ("running", "success", "collision", "timeout")
+REWARD_TERMS = ("success", "collision", "discomfort", "progress", "time")
+PARK = 1.0e4
+"""Inactive pedestrian slots are parked this far away [m] (beyond every sensing and interaction range)."""
+
+
+@dataclass
+class StepResult:
+    """What one batched step produced. All arrays have leading dimension ``B``."""
+
+    reward: np.ndarray
+    """Robot reward ``(B,)`` = sum of ``terms``."""
+    terms: dict[str, np.ndarray]
+    """Named reward terms (:data:`REWARD_TERMS`), each ``(B,)``."""
+    terminated: np.ndarray
+    """``(B,)`` bool: success or collision."""
+    truncated: np.ndarray
+    """``(B,)`` bool: time limit reached without termination."""
+    outcome: np.ndarray
+    """``(B,)`` int: RUNNING, SUCCESS, COLLISION or TIMEOUT."""
+    d_min: np.ndarray
+    """Smallest robot–pedestrian surface distance during the step ``(B,)`` [m] (inf without pedestrians)."""
+    human_overlaps: np.ndarray
+    """Pedestrian pairs overlapping at the end of the step ``(B,)``."""
+    robot_hit_obstacle: np.ndarray
+    """``(B,)`` bool."""
+
+
+class CrowdWorld:
+    """A batch of crowd worlds.
+
+    Args:
+        config: Geometry, timing and sensing shared by all worlds.
+        num_worlds: Batch size ``B``.
+        layout: Layout name or instance.
+        human_model: Pedestrian model name or instance (see :mod:`crowdbench.humans`).
+        human_model_kwargs: Keyword arguments for a model given by name.
+
+    """
+
+    def __init__(
+        self,
+        config: WorldConfig | None = None,
+        num_worlds: int = 1,
+        layout: str | Layout = "circle_crossing",
+        human_model: str | HumanModel = "linear",
+        human_model_kwargs: dict | None = None,
+    ) -> None:
+        self.config = config = config or WorldConfig()
+        if num_worlds < 1:
+            raise ValueError(f"num_worlds must be ≥ 1, got {num_worlds}")
+        self.num_worlds = B = num_worlds
+        self.num_humans = H = config.max_humans
+        self.num_agents = A = H + 1
+        self.layout = make_layout(layout)
+        self.human_model = make(human_model, **(human_model_kwargs or {}))
+        walls: tuple = ()
+        if config.arena_walls:
+            s = self.layout.half_size
+            corners = [(-s, -s), (s, -s), (s, s), (-s, s)]
+            walls = tuple((corners[i], corners[(i + 1) % 4]) for i in range(4))
+        self.obstacles = tuple(self.layout.obstacles()) + walls + tuple(config.obstacles)
+        self.edges = obstacle_edges(self.obstacles)  # (S, 2, 2)
+        self.dt = config.time_step
+
+        self.pos = np.zeros((B, A, 2))
+        self.vel = np.zeros((B, A, 2))
+        self.goal = np.zeros((B, A, 2))
+        self.radius = np.full((B, A), config.human_radius)
+        self.radius[:, 0] = config.robot_radius
+        self.v_pref = np.full((B, A), config.human_v_pref)
+        self.v_pref[:, 0] = config.robot_v_pref
+        self.heading = np.zeros((B, A))
+        self.active = np.zeros((B, A), dtype=bool)
+        self.steps = np.zeros(B, dtype=np.int64)
+        self.prev_goal_dist = np.zeros(B)
+        self.rngs: list[np.random.Generator] = [np.random.default_rng(0) for _ in range(B)]
+        park_x, park_y = np.meshgrid(PARK + 3.0 * np.arange(A), PARK + 3.0 * np.arange(B))
+        self._park = np.stack([park_x, park_y], -1)  # (B, A, 2): distinct, far-away slots
+
+        self.physics = PymunkWorlds(self.radius[0], self.obstacles, B)
+        self.human_model.bind(B, H, self.obstacles, self.dt)
+        self.reset(seeds=list(range(B)))
+        self.physics.verify()
+
+    def space(self, world: int) -> pymunk.Space:
+        """The pymunk space of world ``world`` (for spatial queries and custom physics; keep it in sync yourself)."""
+        return self.physics.spaces[world]
+
+    # ------------------------------------------------------------------ state views
+    def crowd_state(self) -> CrowdState:
+        """The batched view handed to pedestrian models."""
+        return CrowdState(
+            positions=self.pos[:, 1:], velocities=self.vel[:, 1:], goals=self.goal[:, 1:], radii=self.radius[:, 1:],
+            v_pref=self.v_pref[:, 1:], headings=self.heading[:, 1:], active=self.active[:, 1:],
+            robot_position=self.pos[:, 0], robot_velocity=self.vel[:, 0], robot_radius=self.radius[:, 0],
+            robot_visible=self.config.robot_visible, obstacles=self.obstacles, edges=self.edges, time_step=self.dt)
+
+    def goal_distance(self) -> np.ndarray:
+        """Robot centre to goal ``(B,)`` [m]."""
+        return norm(self.goal[:, 0] - self.pos[:, 0])
+
+    # ------------------------------------------------------------------ reset
+    def reset(self, seeds: Sequence[int | None] | int | None = None, mask: np.ndarray | None = None) -> None:
+        """Start new episodes.
+
+        Args:
+            seeds: One seed per selected world (or one int for a single selected world). World ``b``'s episode
+                generator is ``np.random.default_rng(seed)``; ``None`` draws fresh entropy.
+            mask: ``(B,)`` bool, the worlds to reset (default: all).
+
+        """
+        idx = np.arange(self.num_worlds) if mask is None else np.flatnonzero(mask)
+        if seeds is None or isinstance(seeds, (int, np.integer)):
+            seeds = [seeds] * len(idx) if seeds is None or len(idx) == 1 else [int(seeds) + i for i in range(len(idx))]
+        if len(seeds) != len(idx):
+            raise ValueError(f"seeds has {len(seeds)} entries for {len(idx)} worlds to reset")
+        cfg, lay = self.config, self.layout
+        for b, seed in zip(idx, seeds, strict=True):
+            rng = self.rngs[b] = np.random.default_rng(seed)
+            n = cfg.num_humans if cfg.humans_range is None else int(rng.integers(cfg.humans_range[0],
+                                                                                   cfg.humans_range[1] + 1))
+            starts, goals = lay.sample(rng, n, cfg.human_radius, cfg.robot_radius, self.obstacles)
+            self.pos[b] = self._park[b]
+            self.goal[b] = self._park[b]
+            self.pos[b, 0], self.goal[b, 0] = lay.robot_start, lay.robot_goal
+            self.pos[b, 1:n + 1], self.goal[b, 1:n + 1] = starts, goals
+            self.active[b] = False
+            self.active[b, :n + 1] = True
+        d = self.goal[idx] - self.pos[idx]
+        self.heading[idx] = np.arctan2(d[..., 1], d[..., 0])
+        self.vel[idx] = 0.0
+        self.steps[idx] = 0
+        self.prev_goal_dist[idx] = self.goal_distance()[idx]
+        self.physics.set_positions(idx, self.pos[idx])
+        self.human_model.reset(idx, self.rngs, self.crowd_state())
+
+    # ------------------------------------------------------------------ step
+    def robot_velocity(self, action: np.ndarray) -> np.ndarray:
+        """Planar robot velocity ``(B, 2)`` [m/s] from an action ``(B, 2)``; updates the heading for unicycles.
+
+        holonomic: action = (vx, vy) [m/s], norm clipped to v_pref. unicycle: action = (v [m/s], ω [rad/s]),
+        v clipped to [0, v_pref] and ω to ±max_angular_speed; the heading turns by ω·dt before moving.
+        """
+        action = np.asarray(action, dtype=np.float64).reshape(self.num_worlds, 2)
+        vp = self.v_pref[:, 0]
+        if self.config.kinematics == "holonomic":
+            return _clip_norm(action, vp)
+        v = np.clip(action[:, 0], 0.0, vp)
+        w = np.clip(action[:, 1], -self.config.max_angular_speed, self.config.max_angular_speed)
+        self.heading[:, 0] = _wrap(self.heading[:, 0] + w * self.dt)
+        return v[:, None] * np.stack([np.cos(self.heading[:, 0]), np.sin(self.heading[:, 0])], -1)
+
+    def step(
+        self,
+        robot_action: np.ndarray,
+        human_actions: np.ndarray | None = None,
+        human_override: np.ndarray | None = None,
+    ) -> StepResult:
+        """Advance every world by one time step.
+
+        Args:
+            robot_action: ``(B, 2)``, see :meth:`robot_velocity`.
+            human_actions: Optional ``(B, H, 2)`` velocities [m/s] for externally driven pedestrians.
+            human_override: ``(B, H)`` bool: which pedestrians follow ``human_actions`` instead of the model.
+
+        """
+        cfg, rw, dt = self.config, self.config.reward, self.dt
+        vel = np.empty_like(self.vel)
+        vel[:, 0] = self.robot_velocity(robot_action)
+        if self.num_humans:
+            state = self.crowd_state()
+            hv = self.human_model.step(state, self.rngs)
+            if human_override is not None and human_override.any():
+                hv = np.where(human_override[..., None], human_actions, hv)
+            vel[:, 1:] = _clip_norm(hv, self.v_pref[:, 1:])
+        vel[~self.active] = 0.0
+        disp = vel * dt
+
+        robot_hit = np.zeros(self.num_worlds, dtype=bool)
+        if len(self.edges):
+            frac, hit = swept_segment_fraction(self.pos, disp, self.radius, self.edges)
+            frac[~self.active] = 1.0
+            disp *= frac[..., None]
+            vel = disp / dt
+            robot_hit = hit[:, 0]
+
+        # robot–pedestrian swept clearance (before moving: uses start positions and displacements)
+        if self.num_humans:
+            centre = swept_pair_min_distance(self.pos[:, 1:] - self.pos[:, :1], disp[:, 1:] - disp[:, :1])
+            surface = centre - self.radius[:, 1:] - self.radius[:, :1]
+            d_min = np.where(self.active[:, 1:], surface, np.inf).min(axis=1)
+        else:
+            d_min = np.full(self.num_worlds, np.inf)
+
+        # pymunk integrates the motion
+        self.pos = self.physics.step(vel, dt)
+        self.vel = vel
+        moving = np.einsum("bai,bai->ba", vel, vel) > 1e-12
+        if cfg.kinematics == "unicycle":
+            moving[:, 0] = False
+        self.heading = np.where(moving, np.arctan2(vel[..., 1], vel[..., 0]), self.heading)
+
+        # outcome and reward (the paper's piecewise main term, first matching case wins)
+        gdist = self.goal_distance()
+        success = gdist <= rw.goal_tolerance
+        collision = ((d_min <= 0.0) | robot_hit) & ~success
+        discomfort = ~success & ~collision & (d_min < rw.discomfort_dist)
+        progress = ~success & ~collision & ~discomfort
+        terms = {
+            "success": np.where(success, rw.success, 0.0),
+            "collision": np.where(collision, rw.collision, 0.0),
+            "discomfort": np.where(discomfort, rw.discomfort_scale * (d_min - rw.discomfort_dist), 0.0),
+            "progress": np.where(progress, rw.progress_scale * (self.prev_goal_dist - gdist), 0.0),
+            "time": np.full(self.num_worlds, rw.time_penalty),
+        }
+        reward = sum(terms.values())
+        self.prev_goal_dist = gdist
+        self.steps += 1
+        terminated = success | collision
+        truncated = ~terminated & (self.steps >= cfg.max_steps)
+        outcome = np.select([success, collision, truncated], [SUCCESS, COLLISION, TIMEOUT], RUNNING)
+
+        overlaps = np.zeros(self.num_worlds, dtype=np.int64)
+        if self.num_humans > 1:
+            hp = self.pos[:, 1:]
+            dx = hp[:, :, None, 0] - hp[:, None, :, 0]
+            dy = hp[:, :, None, 1] - hp[:, None, :, 1]
+            rr = self.radius[:, 1:, None] + self.radius[:, None, 1:]
+            act = self.active[:, 1:, None] & self.active[:, None, 1:]
+            overlaps = (np.triu(dx * dx + dy * dy < rr * rr, 1) & act).sum(axis=(1, 2))
+        if self.num_humans:
+            self._renew_goals()
+        return StepResult(reward, terms, terminated, truncated, outcome, d_min, overlaps, robot_hit)
+
+    def _renew_goals(self) -> None:
+        """Pedestrians within one radius of their goal get a new one by the layout's rule."""
+        hp, hg = self.pos[:, 1:], self.goal[:, 1:]
+        reached = self.active[:, 1:] & (norm(hg - hp) <= self.radius[:, 1:])
+        if not reached.any():
+            return
+        for b in np.flatnonzero(reached.any(axis=1)):
+            i = np.flatnonzero(reached[b]) + 1
+            self.goal[b, i] = self.layout.renew_goals(self.rngs[b], self.pos[b, i], self.goal[b, i])
+
+
+def _clip_norm(v: np.ndarray, vmax: np.ndarray) -> np.ndarray:
+    """Scale vectors ``(..., 2)`` down to at most ``vmax`` ``(...)`` in norm."""
+    n = norm(v)
+    return v * np.minimum(1.0, vmax / np.maximum(n, 1e-12))[..., None]
+
+
+def _wrap(a: np.ndarray) -> np.ndarray:
+    return (a + np.pi) % (2 * np.pi) - np.pi
