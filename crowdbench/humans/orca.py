@@ -1,0 +1,224 @@
+"""ORCA pedestrians (RVO2-faithful, batched numba kernel) and a drop-in replacement for Python-RVO2.
+
+* :class:`ORCA` — the pedestrian model: every pedestrian runs ORCA toward its goal among the other pedestrians, the
+  static obstacles and (when visible) the robot. CrowdNav's defaults.
+* :class:`PyRVOSimulator` — Python-RVO2's API (``rvo2.PyRVOSimulator``) on top of the same kernel, so code written
+  for the unmaintained ``rvo2`` package runs unchanged: ``from crowdbench.humans.orca import PyRVOSimulator``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from crowdbench.humans.base import CrowdState, HumanModel, preferred_velocity, register
+from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
+
+
+@dataclass(frozen=True)
+class ORCAParams:
+    """ORCA parameters (CrowdNav's defaults)."""
+
+    neighbor_dist: float = 10.0
+    """Neighbours are searched within this distance [m]."""
+    max_neighbors: int = 10
+    """At most this many agent neighbours [-]."""
+    time_horizon: float = 5.0
+    """Agent–agent avoidance horizon [s]."""
+    time_horizon_obst: float = 5.0
+    """Agent–obstacle avoidance horizon [s]."""
+    radius_pad: float = 0.01
+    """Added to every agent's radius inside ORCA (CrowdNav's ``radius + 0.01``) [m]."""
+    safety_space: float = 0.0
+    """Extra clearance added to every radius inside ORCA [m]."""
+
+    def __post_init__(self) -> None:
+        for name in ("neighbor_dist", "time_horizon", "time_horizon_obst"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
+        if self.max_neighbors < 0:
+            raise ValueError(f"max_neighbors must be ≥ 0, got {self.max_neighbors}")
+
+
+class ORCABase(HumanModel):
+    """Shared machinery: agent arrays ``[robot, humans...]`` per world, handed to :func:`orca_batch`."""
+
+    def __init__(self, **params) -> None:
+        self.params = ORCAParams(**params)
+
+    def bind(self, num_worlds: int, num_humans: int, obstacles, time_step: float) -> None:
+        super().bind(num_worlds, num_humans, obstacles, time_step)
+        p, B, A = self.params, num_worlds, num_humans + 1
+        self._obst = build_obstacles(obstacles) if obstacles else build_obstacles([])
+        self._nd = np.full((B, A), p.neighbor_dist)
+        self._mn = np.full((B, A), p.max_neighbors, dtype=np.int64)
+        self._th = np.full((B, A), p.time_horizon)
+        self._tho = np.full((B, A), p.time_horizon_obst)
+        self._controlled = np.ones((B, A), dtype=bool)
+        self._controlled[:, 0] = False
+        self._out = np.zeros((B, A, 2))
+        self._pos = np.zeros((B, A, 2))
+        self._vel = np.zeros((B, A, 2))
+        self._pref = np.zeros((B, A, 2))
+        self._rad = np.zeros((B, A))
+        self._vmax = np.zeros((B, A))
+        self._active = np.zeros((B, A), dtype=bool)
+
+    def robot_ignored(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
+        """``(B, H)`` bool: pedestrians that leave the robot out of their neighbour set this step."""
+        return np.full(state.active.shape, not state.robot_visible)
+
+    def step(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
+        pad = self.params.radius_pad + self.params.safety_space
+        self._pos[:, 0], self._pos[:, 1:] = state.robot_position, state.positions
+        self._vel[:, 0], self._vel[:, 1:] = state.robot_velocity, state.velocities
+        self._pref[:, 1:] = preferred_velocity(state.positions, state.goals, state.v_pref, state.time_step)
+        self._rad[:, 0], self._rad[:, 1:] = state.robot_radius + pad, state.radii + pad
+        self._vmax[:, 1:] = state.v_pref
+        self._active[:, 0], self._active[:, 1:] = True, state.active
+        ignore = np.where(self.robot_ignored(state, rngs), 0, -1)
+        ignore = np.concatenate([np.full((len(ignore), 1), -1), ignore], axis=1)
+        orca_batch(self._pos, self._vel, self._pref, self._rad, self._vmax, self._nd, self._mn, self._th, self._tho,
+                   self._active, self._controlled, ignore, *self._obst, state.time_step, self._out)
+        return self._out[:, 1:].copy()
+
+
+@register("orca")
+class ORCA(ORCABase):
+    """RVO2 ORCA pedestrians. The robot is a neighbour whenever it is visible (``robot_visible``); keyword arguments
+    are :class:`ORCAParams` fields."""
+
+
+class PyRVOSimulator:
+    """Drop-in replacement for Python-RVO2's ``rvo2.PyRVOSimulator`` (same constructor and method names).
+
+    Args:
+        timeStep: [s]. neighborDist: [m]. maxNeighbors: [-]. timeHorizon, timeHorizonObst: [s]. radius: [m].
+        maxSpeed: [m/s]. velocity: initial velocity of added agents [m/s].
+
+    ``doStep`` runs the batched numba kernel once for all agents (float64). Obstacles become active after
+    ``processObstacles()``, as in RVO2.
+    """
+
+    def __init__(self, timeStep: float, neighborDist: float, maxNeighbors: int, timeHorizon: float,
+                 timeHorizonObst: float, radius: float, maxSpeed: float, velocity: tuple[float, float] = (0.0, 0.0)):
+        self.time_step = float(timeStep)
+        self.defaults = (float(neighborDist), int(maxNeighbors), float(timeHorizon), float(timeHorizonObst),
+                         float(radius), float(maxSpeed), (float(velocity[0]), float(velocity[1])))
+        self.global_time = 0.0
+        self._pos: list[list[float]] = []
+        self._vel: list[list[float]] = []
+        self._pref: list[list[float]] = []
+        self._par: list[list[float]] = []  # neighborDist, maxNeighbors, timeHorizon, timeHorizonObst, radius, maxSpeed
+        self._pending: list[list[tuple[float, float]]] = []
+        self._obstacles: list[list[tuple[float, float]]] = []
+        self._obst = build_obstacles([])
+
+    # --- agents
+    def addAgent(self, pos, neighborDist=None, maxNeighbors=None, timeHorizon=None, timeHorizonObst=None,
+                 radius=None, maxSpeed=None, velocity=None) -> int:
+        d = self.defaults
+        given = (neighborDist, maxNeighbors, timeHorizon, timeHorizonObst, radius, maxSpeed)
+        self._par.append([float(g if g is not None else dv) for g, dv in zip(given, d[:6], strict=True)])
+        v = velocity if velocity is not None else d[6]
+        self._pos.append([float(pos[0]), float(pos[1])])
+        self._vel.append([float(v[0]), float(v[1])])
+        self._pref.append([0.0, 0.0])
+        return len(self._pos) - 1
+
+    def getNumAgents(self) -> int:
+        return len(self._pos)
+
+    def _check(self, agent_no: int) -> int:
+        if not 0 <= agent_no < len(self._pos):
+            raise IndexError(f"agent_no={agent_no} out of range; {len(self._pos)} agents")
+        return agent_no
+
+    def setAgentPrefVelocity(self, agent_no: int, velocity) -> None:
+        self._pref[self._check(agent_no)] = [float(velocity[0]), float(velocity[1])]
+
+    def setAgentPosition(self, agent_no: int, position) -> None:
+        self._pos[self._check(agent_no)] = [float(position[0]), float(position[1])]
+
+    def setAgentVelocity(self, agent_no: int, velocity) -> None:
+        self._vel[self._check(agent_no)] = [float(velocity[0]), float(velocity[1])]
+
+    def setAgentRadius(self, agent_no: int, radius: float) -> None:
+        self._par[self._check(agent_no)][4] = float(radius)
+
+    def setAgentMaxSpeed(self, agent_no: int, max_speed: float) -> None:
+        self._par[self._check(agent_no)][5] = float(max_speed)
+
+    def setAgentNeighborDist(self, agent_no: int, dist: float) -> None:
+        self._par[self._check(agent_no)][0] = float(dist)
+
+    def setAgentMaxNeighbors(self, agent_no: int, n: int) -> None:
+        self._par[self._check(agent_no)][1] = int(n)
+
+    def setAgentTimeHorizon(self, agent_no: int, t: float) -> None:
+        self._par[self._check(agent_no)][2] = float(t)
+
+    def setAgentTimeHorizonObst(self, agent_no: int, t: float) -> None:
+        self._par[self._check(agent_no)][3] = float(t)
+
+    def getAgentPosition(self, agent_no: int) -> tuple[float, float]:
+        return tuple(self._pos[self._check(agent_no)])
+
+    def getAgentVelocity(self, agent_no: int) -> tuple[float, float]:
+        return tuple(self._vel[self._check(agent_no)])
+
+    def getAgentPrefVelocity(self, agent_no: int) -> tuple[float, float]:
+        return tuple(self._pref[self._check(agent_no)])
+
+    def getAgentRadius(self, agent_no: int) -> float:
+        return self._par[self._check(agent_no)][4]
+
+    def getAgentMaxSpeed(self, agent_no: int) -> float:
+        return self._par[self._check(agent_no)][5]
+
+    def getGlobalTime(self) -> float:
+        return self.global_time
+
+    def getTimeStep(self) -> float:
+        return self.time_step
+
+    def setTimeStep(self, time_step: float) -> None:
+        self.time_step = float(time_step)
+
+    # --- obstacles
+    def addObstacle(self, vertices) -> int:
+        """Add a polygon (counter-clockwise vertices; 2 vertices = segment). Active after :meth:`processObstacles`."""
+        if len(vertices) < 2:
+            raise ValueError("addObstacle needs at least 2 vertices")
+        first = sum(len(o) for o in self._obstacles) + sum(len(o) for o in self._pending)
+        self._pending.append([(float(x), float(y)) for x, y in vertices])
+        return first
+
+    def processObstacles(self) -> None:
+        self._obstacles.extend(self._pending)
+        self._pending = []
+        self._obst = build_obstacles(self._obstacles)
+
+    def getNumObstacleVertices(self) -> int:
+        return len(self._obst[0])
+
+    # --- simulation
+    def doStep(self) -> None:
+        """Advance all agents by one time step (synchronous: all new velocities from the old state)."""
+        n = len(self._pos)
+        if n == 0:
+            self.global_time += self.time_step
+            return
+        pos = np.asarray(self._pos)[None]
+        vel = np.asarray(self._vel)[None]
+        par = np.asarray(self._par).T[:, None, :]
+        out = np.empty_like(vel)
+        orca_batch(pos, vel, np.asarray(self._pref)[None], par[4], par[5], par[0], par[1].astype(np.int64),
+                   par[2], par[3], np.ones((1, n), bool), np.ones((1, n), bool), np.full((1, n), -1, np.int64),
+                   *self._obst, self.time_step, out)
+        new_pos = pos + out * self.time_step
+        self._vel = out[0].tolist()
+        self._pos = new_pos[0].tolist()
+        self.global_time += self.time_step

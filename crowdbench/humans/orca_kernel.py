@@ -1,0 +1,410 @@
+"""RVO2 (van den Berg et al., ORCA) ported line-for-line to numba, batched over worlds and agents.
+
+Source of truth: the reference C++ library, RVO2 2.0.x (``Agent::computeNeighbors``, ``Agent::computeNewVelocity``,
+``linearProgram1/2/3``, ``KdTree::queryObstacleTreeRecursive``, ``RVOSimulator::addObstacle``). Differences:
+
+* computed in float64 (the C++ library uses float32; see ``shared/reference/orca`` for the tolerances this meets);
+* neighbours are found by brute force instead of kd-trees. The result is the same set — the ``max_neighbors``
+  nearest agents strictly within ``neighbor_dist`` sorted by squared distance, and the obstacle edges within
+  ``time_horizon_obst * max_speed + radius`` seen from their right side — only exact distance *ties* may be ordered
+  differently (RVO2 keeps kd-tree visiting order; here it is index order);
+* each agent may ignore one other agent (``ignore``), used by the latent-responsive crowd to hide the robot.
+
+All worlds share one obstacle set. Obstacles are stored RVO2-style as vertices with ``next``/``prev`` links,
+``unit_dir`` and ``convex`` flags (see :func:`build_obstacles`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numba as nb
+import numpy as np
+
+RVO_EPSILON = 1e-5
+
+
+def build_obstacles(polygons: Sequence[Sequence[tuple[float, float]]]) -> tuple[np.ndarray, ...]:
+    """RVO2's ``addObstacle`` for each polygon (vertices counter-clockwise; 2 vertices = a two-sided segment).
+
+    Returns ``(point (V, 2), next (V,), prev (V,), unit_dir (V, 2), convex (V,))``.
+    """
+    pts, nxt, prv, udir, convex = [], [], [], [], []
+    for poly in polygons:
+        v = [tuple(map(float, p)) for p in poly]
+        if len(v) < 2:
+            raise ValueError(f"an obstacle needs ≥ 2 vertices, got {len(v)}")
+        base, n = len(pts), len(v)
+        for i in range(n):
+            pts.append(v[i])
+            nxt.append(base + (i + 1) % n)
+            prv.append(base + (i - 1) % n)
+            d = np.subtract(v[(i + 1) % n], v[i])
+            udir.append(d / np.hypot(*d))
+            if n == 2:
+                convex.append(True)
+            else:
+                a, b, c = v[(i - 1) % n], v[i], v[(i + 1) % n]
+                convex.append(_left_of(a, b, c) >= 0.0)
+    return (np.asarray(pts, np.float64).reshape(-1, 2), np.asarray(nxt, np.int64), np.asarray(prv, np.int64),
+            np.asarray(udir, np.float64).reshape(-1, 2), np.asarray(convex, np.bool_))
+
+
+def _left_of(a, b, c) -> float:
+    return (a[0] - c[0]) * (b[1] - a[1]) - (a[1] - c[1]) * (b[0] - a[0])
+
+
+@nb.njit(cache=True, inline="always")
+def _det(ax, ay, bx, by):
+    return ax * by - ay * bx
+
+
+@nb.njit(cache=True)
+def _lp1(lp, ld, line_no, radius, optx, opty, direction_opt, res):
+    """linearProgram1: optimise on line ``line_no`` subject to lines ``< line_no`` and the speed circle."""
+    px, py = lp[line_no, 0], lp[line_no, 1]
+    dx, dy = ld[line_no, 0], ld[line_no, 1]
+    dot = px * dx + py * dy
+    disc = dot * dot + radius * radius - (px * px + py * py)
+    if disc < 0.0:
+        return False
+    sq = np.sqrt(disc)
+    t_left = -dot - sq
+    t_right = -dot + sq
+    for i in range(line_no):
+        denom = _det(dx, dy, ld[i, 0], ld[i, 1])
+        numer = _det(ld[i, 0], ld[i, 1], px - lp[i, 0], py - lp[i, 1])
+        if abs(denom) <= RVO_EPSILON:
+            if numer < 0.0:
+                return False
+            continue
+        t = numer / denom
+        if denom >= 0.0:
+            t_right = min(t_right, t)
+        else:
+            t_left = max(t_left, t)
+        if t_left > t_right:
+            return False
+    if direction_opt:
+        if optx * dx + opty * dy > 0.0:
+            res[0], res[1] = px + t_right * dx, py + t_right * dy
+        else:
+            res[0], res[1] = px + t_left * dx, py + t_left * dy
+    else:
+        t = dx * (optx - px) + dy * (opty - py)
+        if t < t_left:
+            t = t_left
+        elif t > t_right:
+            t = t_right
+        res[0], res[1] = px + t * dx, py + t * dy
+    return True
+
+
+@nb.njit(cache=True)
+def _lp2(lp, ld, n, radius, optx, opty, direction_opt, res):
+    """linearProgram2: returns the index of the first line that failed (``n`` on success); ``res`` is updated."""
+    if direction_opt:
+        res[0], res[1] = optx * radius, opty * radius
+    elif optx * optx + opty * opty > radius * radius:
+        inv = 1.0 / np.sqrt(optx * optx + opty * opty)
+        res[0], res[1] = optx * inv * radius, opty * inv * radius
+    else:
+        res[0], res[1] = optx, opty
+    for i in range(n):
+        if _det(ld[i, 0], ld[i, 1], lp[i, 0] - res[0], lp[i, 1] - res[1]) > 0.0:
+            tx, ty = res[0], res[1]
+            if not _lp1(lp, ld, i, radius, optx, opty, direction_opt, res):
+                res[0], res[1] = tx, ty
+                return i
+    return n
+
+
+@nb.njit(cache=True)
+def _lp3(lp, ld, n, n_obst, begin, radius, res, pp, pd):
+    """linearProgram3: minimise the maximum penetration of agent lines when the 2-D program is infeasible."""
+    distance = 0.0
+    for i in range(begin, n):
+        if _det(ld[i, 0], ld[i, 1], lp[i, 0] - res[0], lp[i, 1] - res[1]) > distance:
+            m = 0
+            for j in range(n_obst):
+                pp[m, 0], pp[m, 1], pd[m, 0], pd[m, 1] = lp[j, 0], lp[j, 1], ld[j, 0], ld[j, 1]
+                m += 1
+            for j in range(n_obst, i):
+                determinant = _det(ld[i, 0], ld[i, 1], ld[j, 0], ld[j, 1])
+                if abs(determinant) <= RVO_EPSILON:
+                    if ld[i, 0] * ld[j, 0] + ld[i, 1] * ld[j, 1] > 0.0:
+                        continue
+                    ptx = 0.5 * (lp[i, 0] + lp[j, 0])
+                    pty = 0.5 * (lp[i, 1] + lp[j, 1])
+                else:
+                    s = _det(ld[j, 0], ld[j, 1], lp[i, 0] - lp[j, 0], lp[i, 1] - lp[j, 1]) / determinant
+                    ptx = lp[i, 0] + s * ld[i, 0]
+                    pty = lp[i, 1] + s * ld[i, 1]
+                ddx = ld[j, 0] - ld[i, 0]
+                ddy = ld[j, 1] - ld[i, 1]
+                inv = 1.0 / np.sqrt(ddx * ddx + ddy * ddy)
+                pp[m, 0], pp[m, 1], pd[m, 0], pd[m, 1] = ptx, pty, ddx * inv, ddy * inv
+                m += 1
+            tx, ty = res[0], res[1]
+            if _lp2(pp, pd, m, radius, -ld[i, 1], ld[i, 0], True, res) < m:
+                res[0], res[1] = tx, ty
+            distance = _det(ld[i, 0], ld[i, 1], lp[i, 0] - res[0], lp[i, 1] - res[1])
+
+
+@nb.njit(cache=True)
+def _obstacle_lines(px, py, vx, vy, r, th_obst, max_speed, opoint, onext, oprev, odir, oconvex, lp, ld, ob_idx, ob_d):
+    """Obstacle neighbours + obstacle ORCA lines of one agent; returns the number of lines written."""
+    V = opoint.shape[0]
+    range_sq = (th_obst * max_speed + r) ** 2
+    n_ob = 0
+    for o in range(V):
+        o2 = onext[o]
+        ax, ay = opoint[o, 0], opoint[o, 1]
+        bx, by = opoint[o2, 0], opoint[o2, 1]
+        left = (ax - px) * (by - ay) - (ay - py) * (bx - ax)  # leftOf(a, b, agent)
+        abx, aby = bx - ax, by - ay
+        ab2 = abx * abx + aby * aby
+        if left * left / ab2 >= range_sq or left >= 0.0:
+            continue
+        rr = ((px - ax) * abx + (py - ay) * aby) / ab2
+        if rr < 0.0:
+            dsq = (px - ax) ** 2 + (py - ay) ** 2
+        elif rr > 1.0:
+            dsq = (px - bx) ** 2 + (py - by) ** 2
+        else:
+            dsq = (px - ax - rr * abx) ** 2 + (py - ay - rr * aby) ** 2
+        if dsq < range_sq:
+            k = n_ob
+            while k != 0 and dsq < ob_d[k - 1]:
+                ob_d[k], ob_idx[k] = ob_d[k - 1], ob_idx[k - 1]
+                k -= 1
+            ob_d[k], ob_idx[k] = dsq, o
+            n_ob += 1
+
+    inv_th = 1.0 / th_obst
+    n = 0
+    radius_sq = r * r
+    for k in range(n_ob):
+        o1 = ob_idx[k]
+        o2 = onext[o1]
+        r1x, r1y = opoint[o1, 0] - px, opoint[o1, 1] - py
+        r2x, r2y = opoint[o2, 0] - px, opoint[o2, 1] - py
+        covered = False
+        for j in range(n):
+            if (_det(inv_th * r1x - lp[j, 0], inv_th * r1y - lp[j, 1], ld[j, 0], ld[j, 1]) - inv_th * r >= -RVO_EPSILON
+                    and _det(inv_th * r2x - lp[j, 0], inv_th * r2y - lp[j, 1], ld[j, 0], ld[j, 1]) - inv_th * r
+                    >= -RVO_EPSILON):
+                covered = True
+                break
+        if covered:
+            continue
+        dsq1 = r1x * r1x + r1y * r1y
+        dsq2 = r2x * r2x + r2y * r2y
+        obx, oby = opoint[o2, 0] - opoint[o1, 0], opoint[o2, 1] - opoint[o1, 1]
+        s = (-r1x * obx - r1y * oby) / (obx * obx + oby * oby)
+        dlx, dly = -r1x - s * obx, -r1y - s * oby
+        dsq_line = dlx * dlx + dly * dly
+        if s < 0.0 and dsq1 <= radius_sq:
+            if oconvex[o1]:
+                inv = 1.0 / np.sqrt(dsq1)
+                lp[n, 0], lp[n, 1], ld[n, 0], ld[n, 1] = 0.0, 0.0, -r1y * inv, r1x * inv
+                n += 1
+            continue
+        elif s > 1.0 and dsq2 <= radius_sq:
+            if oconvex[o2] and _det(r2x, r2y, odir[o2, 0], odir[o2, 1]) >= 0.0:
+                inv = 1.0 / np.sqrt(dsq2)
+                lp[n, 0], lp[n, 1], ld[n, 0], ld[n, 1] = 0.0, 0.0, -r2y * inv, r2x * inv
+                n += 1
+            continue
+        elif s >= 0.0 and s < 1.0 and dsq_line <= radius_sq:
+            lp[n, 0], lp[n, 1], ld[n, 0], ld[n, 1] = 0.0, 0.0, -odir[o1, 0], -odir[o1, 1]
+            n += 1
+            continue
+
+        if s < 0.0 and dsq_line <= radius_sq:
+            if not oconvex[o1]:
+                continue
+            o2 = o1
+            leg1 = np.sqrt(dsq1 - radius_sq)
+            llx, lly = (r1x * leg1 - r1y * r) / dsq1, (r1x * r + r1y * leg1) / dsq1
+            rlx, rly = (r1x * leg1 + r1y * r) / dsq1, (-r1x * r + r1y * leg1) / dsq1
+        elif s > 1.0 and dsq_line <= radius_sq:
+            if not oconvex[o2]:
+                continue
+            o1 = o2
+            leg2 = np.sqrt(dsq2 - radius_sq)
+            llx, lly = (r2x * leg2 - r2y * r) / dsq2, (r2x * r + r2y * leg2) / dsq2
+            rlx, rly = (r2x * leg2 + r2y * r) / dsq2, (-r2x * r + r2y * leg2) / dsq2
+        else:
+            if oconvex[o1]:
+                leg1 = np.sqrt(dsq1 - radius_sq)
+                llx, lly = (r1x * leg1 - r1y * r) / dsq1, (r1x * r + r1y * leg1) / dsq1
+            else:
+                llx, lly = -odir[o1, 0], -odir[o1, 1]
+            if oconvex[o2]:
+                leg2 = np.sqrt(dsq2 - radius_sq)
+                rlx, rly = (r2x * leg2 + r2y * r) / dsq2, (-r2x * r + r2y * leg2) / dsq2
+            else:
+                rlx, rly = odir[o1, 0], odir[o1, 1]
+
+        left_nb = oprev[o1]
+        left_foreign = False
+        right_foreign = False
+        if oconvex[o1] and _det(llx, lly, -odir[left_nb, 0], -odir[left_nb, 1]) >= 0.0:
+            llx, lly = -odir[left_nb, 0], -odir[left_nb, 1]
+            left_foreign = True
+        if oconvex[o2] and _det(rlx, rly, odir[o2, 0], odir[o2, 1]) <= 0.0:
+            rlx, rly = odir[o2, 0], odir[o2, 1]
+            right_foreign = True
+
+        lcx, lcy = inv_th * (opoint[o1, 0] - px), inv_th * (opoint[o1, 1] - py)
+        rcx, rcy = inv_th * (opoint[o2, 0] - px), inv_th * (opoint[o2, 1] - py)
+        cvx, cvy = rcx - lcx, rcy - lcy
+        same = o1 == o2
+        t = 0.5 if same else ((vx - lcx) * cvx + (vy - lcy) * cvy) / (cvx * cvx + cvy * cvy)
+        t_left = (vx - lcx) * llx + (vy - lcy) * lly
+        t_right = (vx - rcx) * rlx + (vy - rcy) * rly
+
+        if (t < 0.0 and t_left < 0.0) or (same and t_left < 0.0 and t_right < 0.0):
+            wx, wy = vx - lcx, vy - lcy
+            inv = 1.0 / np.sqrt(wx * wx + wy * wy)
+            wx, wy = wx * inv, wy * inv
+            ld[n, 0], ld[n, 1] = wy, -wx
+            lp[n, 0], lp[n, 1] = lcx + r * inv_th * wx, lcy + r * inv_th * wy
+            n += 1
+            continue
+        elif t > 1.0 and t_right < 0.0:
+            wx, wy = vx - rcx, vy - rcy
+            inv = 1.0 / np.sqrt(wx * wx + wy * wy)
+            wx, wy = wx * inv, wy * inv
+            ld[n, 0], ld[n, 1] = wy, -wx
+            lp[n, 0], lp[n, 1] = rcx + r * inv_th * wx, rcy + r * inv_th * wy
+            n += 1
+            continue
+
+        inf = np.inf
+        dsq_cut = inf if (t < 0.0 or t > 1.0 or same) else (vx - (lcx + t * cvx)) ** 2 + (vy - (lcy + t * cvy)) ** 2
+        dsq_left = inf if t_left < 0.0 else (vx - (lcx + t_left * llx)) ** 2 + (vy - (lcy + t_left * lly)) ** 2
+        dsq_right = inf if t_right < 0.0 else (vx - (rcx + t_right * rlx)) ** 2 + (vy - (rcy + t_right * rly)) ** 2
+        if dsq_cut <= dsq_left and dsq_cut <= dsq_right:
+            dx, dy = -odir[o1, 0], -odir[o1, 1]
+            ld[n, 0], ld[n, 1] = dx, dy
+            lp[n, 0], lp[n, 1] = lcx + r * inv_th * (-dy), lcy + r * inv_th * dx
+            n += 1
+        elif dsq_left <= dsq_right:
+            if left_foreign:
+                continue
+            ld[n, 0], ld[n, 1] = llx, lly
+            lp[n, 0], lp[n, 1] = lcx + r * inv_th * (-lly), lcy + r * inv_th * llx
+            n += 1
+        else:
+            if right_foreign:
+                continue
+            dx, dy = -rlx, -rly
+            ld[n, 0], ld[n, 1] = dx, dy
+            lp[n, 0], lp[n, 1] = rcx + r * inv_th * (-dy), rcy + r * inv_th * dx
+            n += 1
+    return n
+
+
+@nb.njit(cache=True)
+def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, time_horizon, time_horizon_obst,
+               active, controlled, ignore, opoint, onext, oprev, odir, oconvex, dt, out):
+    """New ORCA velocities for every controlled agent of every world.
+
+    Args (``B`` worlds, ``A`` agents, ``V`` obstacle vertices; floats in m, s, m/s):
+        pos, vel, pref: ``(B, A, 2)`` positions, current velocities, preferred velocities.
+        radius, max_speed, neighbor_dist, time_horizon, time_horizon_obst: ``(B, A)`` per-agent parameters.
+        max_neighbors: ``(B, A)`` int.
+        active: ``(B, A)`` bool; inactive agents are nobody's neighbour and are not computed.
+        controlled: ``(B, A)`` bool; uncontrolled agents (e.g. the robot) are neighbours only; ``out`` = ``vel``.
+        ignore: ``(B, A)`` int; agent ``i`` never takes agent ``ignore[b, i]`` as a neighbour (-1: none).
+        opoint, onext, oprev, odir, oconvex: obstacles from :func:`build_obstacles` (shared by all worlds).
+        dt: time step [s] (used for the collision cut-off when agents already overlap).
+        out: ``(B, A, 2)`` output velocities.
+    """
+    B, A = pos.shape[0], pos.shape[1]
+    V = opoint.shape[0]
+    L = V + A + 1
+    lp = np.empty((L, 2))
+    ld = np.empty((L, 2))
+    pp = np.empty((L, 2))
+    pd = np.empty((L, 2))
+    res = np.empty(2)
+    nb_idx = np.empty(A + 1, np.int64)
+    nb_d = np.empty(A + 1)
+    ob_idx = np.empty(V + 1, np.int64)
+    ob_d = np.empty(V + 1)
+    inv_dt = 1.0 / dt
+    for b in range(B):
+        for i in range(A):
+            if not (active[b, i] and controlled[b, i]):
+                out[b, i, 0], out[b, i, 1] = vel[b, i, 0], vel[b, i, 1]
+                continue
+            px, py = pos[b, i, 0], pos[b, i, 1]
+            vx, vy = vel[b, i, 0], vel[b, i, 1]
+            r = radius[b, i]
+            ms = max_speed[b, i]
+            n = 0
+            if V > 0:
+                n = _obstacle_lines(px, py, vx, vy, r, time_horizon_obst[b, i], ms, opoint, onext, oprev, odir,
+                                    oconvex, lp, ld, ob_idx, ob_d)
+            n_obst = n
+            # agent neighbours: nearest max_neighbors strictly within neighbor_dist, sorted, stable on ties
+            k_max = max_neighbors[b, i]
+            range_sq = neighbor_dist[b, i] ** 2
+            cnt = 0
+            skip = ignore[b, i]
+            if k_max > 0:
+                for j in range(A):
+                    if j == i or j == skip or not active[b, j]:
+                        continue
+                    dsq = (px - pos[b, j, 0]) ** 2 + (py - pos[b, j, 1]) ** 2
+                    if dsq < range_sq:
+                        if cnt < k_max:
+                            cnt += 1
+                        k = cnt - 1
+                        while k != 0 and dsq < nb_d[k - 1]:
+                            nb_d[k], nb_idx[k] = nb_d[k - 1], nb_idx[k - 1]
+                            k -= 1
+                        nb_d[k], nb_idx[k] = dsq, j
+                        if cnt == k_max:
+                            range_sq = nb_d[cnt - 1]
+            inv_th = 1.0 / time_horizon[b, i]
+            for k in range(cnt):
+                j = nb_idx[k]
+                rpx, rpy = pos[b, j, 0] - px, pos[b, j, 1] - py
+                rvx, rvy = vx - vel[b, j, 0], vy - vel[b, j, 1]
+                dsq = rpx * rpx + rpy * rpy
+                cr = r + radius[b, j]
+                cr_sq = cr * cr
+                if dsq > cr_sq:
+                    wx, wy = rvx - inv_th * rpx, rvy - inv_th * rpy
+                    w_len_sq = wx * wx + wy * wy
+                    dot1 = wx * rpx + wy * rpy
+                    if dot1 < 0.0 and dot1 * dot1 > cr_sq * w_len_sq:
+                        w_len = np.sqrt(w_len_sq)
+                        uwx, uwy = wx / w_len, wy / w_len
+                        dx, dy = uwy, -uwx
+                        ux, uy = (cr * inv_th - w_len) * uwx, (cr * inv_th - w_len) * uwy
+                    else:
+                        leg = np.sqrt(dsq - cr_sq)
+                        if _det(rpx, rpy, wx, wy) > 0.0:
+                            dx, dy = (rpx * leg - rpy * cr) / dsq, (rpx * cr + rpy * leg) / dsq
+                        else:
+                            dx, dy = -(rpx * leg + rpy * cr) / dsq, -(-rpx * cr + rpy * leg) / dsq
+                        dot2 = rvx * dx + rvy * dy
+                        ux, uy = dot2 * dx - rvx, dot2 * dy - rvy
+                else:
+                    wx, wy = rvx - inv_dt * rpx, rvy - inv_dt * rpy
+                    w_len = np.sqrt(wx * wx + wy * wy)
+                    uwx, uwy = wx / w_len, wy / w_len
+                    dx, dy = uwy, -uwx
+                    ux, uy = (cr * inv_dt - w_len) * uwx, (cr * inv_dt - w_len) * uwy
+                lp[n, 0], lp[n, 1] = vx + 0.5 * ux, vy + 0.5 * uy
+                ld[n, 0], ld[n, 1] = dx, dy
+                n += 1
+            fail = _lp2(lp, ld, n, ms, pref[b, i, 0], pref[b, i, 1], False, res)
+            if fail < n:
+                _lp3(lp, ld, n, n_obst, fail, ms, res, pp, pd)
+            out[b, i, 0], out[b, i, 1] = res[0], res[1]
