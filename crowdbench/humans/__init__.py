@@ -1,7 +1,16 @@
-"""Pluggable pedestrian models: the contract, the registry and the shipped models."""
+"""Pluggable pedestrian models: the contract, the registry and the shipped models.
+
+Shipped: ``orca`` (RVO2-faithful), ``responsive_orca`` (the paper's latent-responsive crowd), ``social_force``
+(CrowdNav++'s variant) and ``linear`` (non-reactive). Register your own with :func:`register` or the entry-point
+group ``crowdbench.humans``.
+"""
 
 from __future__ import annotations
 
 from crowdbench.humans.base import HUMAN_MODELS, CrowdState, HumanModel, Linear, make, preferred_velocity, register
+from crowdbench.humans.orca import ORCA, ORCAParams, PyRVOSimulator
+from crowdbench.humans.responsive import ResponsiveORCA
+from crowdbench.humans.social_force import SocialForce
 
-__all__ = ["HUMAN_MODELS", "CrowdState", "HumanModel", "Linear", "make", "preferred_velocity", "register"]
+__all__ = ["HUMAN_MODELS", "ORCA", "ORCAParams", "CrowdState", "HumanModel", "Linear", "PyRVOSimulator",
+           "ResponsiveORCA", "SocialForce", "make", "preferred_velocity", "register"]

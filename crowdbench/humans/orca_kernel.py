@@ -357,7 +357,7 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
             skip = ignore[b, i]
             if k_max > 0:
                 for j in range(A):
-                    if j == i or j == skip or not active[b, j]:
+                    if j == i or j == skip or not active[b, j]:  # noqa: SIM109 (numba-friendly)
                         continue
                     dsq = (px - pos[b, j, 0]) ** 2 + (py - pos[b, j, 1]) ** 2
                     if dsq < range_sq:

@@ -1,0 +1,8 @@
+"""Thin adapters over :class:`~crowdbench.worlds.CrowdWorld`: PettingZoo (multi-agent) and Gymnasium (robot)."""
+
+from __future__ import annotations
+
+from crowdbench.envs.gym_env import CrowdNavEnv, register_envs
+from crowdbench.envs.parallel import CrowdParallelEnv, parallel_env
+
+__all__ = ["CrowdNavEnv", "CrowdParallelEnv", "parallel_env", "register_envs"]

@@ -1,0 +1,48 @@
+"""Helpers shared by the PettingZoo and Gymnasium adapters."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from crowdbench.config import WorldConfig, make_config
+from crowdbench.worlds.world import OUTCOMES, CrowdWorld, StepResult
+
+
+def build_world(layout: str, num_humans: int, human_model: Any, human_model_kwargs: dict | None,
+                world_options: dict[str, Any]) -> CrowdWorld:
+    """One world (batch of one) from keyword options; unknown options raise ``TypeError`` naming the valid ones."""
+    config = make_config(num_humans=num_humans, **world_options)
+    return CrowdWorld(config, num_worlds=1, layout=layout, human_model=human_model,
+                      human_model_kwargs=human_model_kwargs)
+
+
+def robot_action_space(config: WorldConfig) -> spaces.Box:
+    """holonomic: (vx, vy) in [-v_pref, v_pref]² (norm clipped to v_pref); unicycle: (v, ω) in [0, v_pref] × ±ω_max."""
+    if config.kinematics == "holonomic":
+        v = config.robot_v_pref
+        return spaces.Box(-v, v, (2,), np.float32)
+    return spaces.Box(np.array([0.0, -config.max_angular_speed], np.float32),
+                      np.array([config.robot_v_pref, config.max_angular_speed], np.float32), dtype=np.float32)
+
+
+def robot_info(world: CrowdWorld, res: StepResult | None) -> dict[str, Any]:
+    """The robot's info dict for world 0: outcome, named reward terms, clearance, overlaps, crowd analysis arrays."""
+    info: dict[str, Any] = {"time": float(world.steps[0] * world.dt)}
+    if res is not None:
+        info.update(
+            outcome=OUTCOMES[int(res.outcome[0])],
+            reward_terms={k: float(v[0]) for k, v in res.terms.items()},
+            d_min=float(res.d_min[0]),
+            human_overlaps=int(res.human_overlaps[0]),
+            robot_hit_obstacle=bool(res.robot_hit_obstacle[0]),
+        )
+    info["crowd"] = {k: v[0].copy() for k, v in world.human_model.info().items()}
+    return info
+
+
+def config_fields() -> list[str]:
+    return [f.name for f in dataclasses.fields(WorldConfig)]

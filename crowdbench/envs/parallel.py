@@ -1,0 +1,171 @@
+"""PettingZoo ParallelEnv: the robot and every pedestrian are agents of one crowd world.
+
+Agents: ``possible_agents = ["robot", "human_0", ..., "human_{H-1}"]``; ``agents`` holds the robot and the
+pedestrians present this episode (fewer when ``humans_range`` draws a smaller crowd).
+
+Actions: every agent's action is a planar velocity [m/s] (the robot's is (v, ω) with ``kinematics="unicycle"``).
+**A pedestrian given an action in ``step()`` follows it; a pedestrian left out of the actions dict is driven by the
+world's pedestrian model** — so ``env.step({"robot": a})`` runs the usual benchmark, and any subset of pedestrians
+can be driven from outside (multi-agent testbed). The robot's action is required.
+
+Observations: the robot's comes from the ``observation`` builder (``relative`` — the paper's — or ``full_state``,
+see :mod:`crowdbench.robots.observations`); each pedestrian observes itself ([px, py, vx, vy, gx, gy, r, v_pref, θ])
+and its neighbours within ``human_sensing_range`` ((Δx, Δy, vx, vy, r), nearest first, with a mask).
+
+Rewards: the robot's is the paper's reward (terms in ``infos["robot"]["reward_terms"]``); pedestrians get 0.
+
+Episode end: on the robot's success or collision the robot is *terminated* and every pedestrian *truncated*; at the
+time limit (``time_limit``, or ``max_cycles`` steps if set) everyone is truncated. Pedestrians never leave early:
+a pedestrian reaching its goal gets a new one from the layout.
+
+Arguments: ``layout``, ``num_humans``, ``human_model`` (name or instance), ``human_model_kwargs``, ``seed`` (used
+by the first ``reset()`` without a seed), ``render_mode`` (``"rgb_array"``), ``observation``, ``max_cycles``, and any
+:class:`~crowdbench.config.WorldConfig` field as a keyword.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from pettingzoo import ParallelEnv
+
+from crowdbench.envs.common import build_world, robot_action_space, robot_info
+from crowdbench.robots.observations import human_observation_space, human_observations, make_observation
+
+
+class CrowdParallelEnv(ParallelEnv):
+    """See the module docstring."""
+
+    metadata = {"name": "crowdbench_v0", "render_modes": ["rgb_array"], "render_fps": 4, "is_parallelizable": True}
+
+    def __init__(self, layout: str = "circle_crossing", num_humans: int = 20, human_model: Any = "orca",
+                 seed: int | None = None, render_mode: str | None = None, observation: str = "relative",
+                 max_cycles: int | None = None, human_model_kwargs: dict | None = None, **world_options: Any):
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode={render_mode!r}; valid choices: None, 'rgb_array'")
+        self.world = build_world(layout, num_humans, human_model, human_model_kwargs, world_options)
+        self.config = self.world.config
+        self.render_mode = render_mode
+        self.max_cycles = max_cycles
+        self._obs_builder = make_observation(observation, self.config)
+        self._seed = seed
+        H = self.world.num_humans
+        self.possible_agents = ["robot"] + [f"human_{i}" for i in range(H)]
+        self.agents = list(self.possible_agents)
+        self._renderer = None
+        self._state_space = spaces.Box(-1e5, 1e5, (len(self.possible_agents) * 7,), np.float32)
+
+    # spaces must be the same object on every call
+    @functools.cache  # noqa: B019
+    def observation_space(self, agent: str) -> spaces.Space:
+        if agent == "robot":
+            return self._obs_builder.space()
+        self._check_agent(agent)
+        return human_observation_space(self.config)
+
+    @functools.cache  # noqa: B019
+    def action_space(self, agent: str) -> spaces.Space:
+        if agent == "robot":
+            return robot_action_space(self.config)
+        self._check_agent(agent)
+        v = self.config.human_v_pref
+        return spaces.Box(-v, v, (2,), np.float32)
+
+    @property
+    def state_space(self) -> spaces.Box:
+        return self._state_space
+
+    def _check_agent(self, agent: str) -> None:
+        if agent not in self.possible_agents:
+            raise ValueError(f"unknown agent {agent!r}; valid: 'robot', 'human_0' … 'human_{self.world.num_humans-1}'")
+
+    # ------------------------------------------------------------------ API
+    def reset(self, seed: int | None = None, options: dict | None = None):
+        if seed is None:
+            seed, self._seed = self._seed, None
+        self.world.reset(seeds=[seed])
+        self._cycles = 0
+        n = int(self.world.active[0, 1:].sum())
+        self.agents = ["robot"] + [f"human_{i}" for i in range(n)]
+        if self._renderer is not None:
+            self._renderer.clear()
+        obs = self._observations()
+        infos = {a: {} for a in self.agents}
+        infos["robot"] = robot_info(self.world, None)
+        return obs, infos
+
+    def step(self, actions: dict[str, Any]):
+        if "robot" not in actions:
+            raise ValueError("actions must include 'robot' (pedestrians left out are driven by the pedestrian model)")
+        H = self.world.num_humans
+        human_actions = np.zeros((1, H, 2))
+        override = np.zeros((1, H), dtype=bool)
+        for agent, act in actions.items():
+            if agent == "robot" or act is None:
+                continue
+            if agent not in self.agents:
+                raise ValueError(f"action for {agent!r}, which is not a live agent; live agents: {self.agents}")
+            i = int(agent.split("_")[1])
+            human_actions[0, i] = np.asarray(act, dtype=np.float64).reshape(2)
+            override[0, i] = True
+        res = self.world.step(np.asarray(actions["robot"], dtype=np.float64).reshape(1, 2), human_actions, override)
+        self._cycles += 1
+        robot_done = bool(res.terminated[0])
+        trunc = bool(res.truncated[0]) or (self.max_cycles is not None and self._cycles >= self.max_cycles)
+        obs = self._observations()
+        rewards = {a: 0.0 for a in self.agents}
+        rewards["robot"] = float(res.reward[0])
+        terminations = {a: False for a in self.agents}
+        terminations["robot"] = robot_done
+        truncations = {a: trunc or robot_done for a in self.agents}
+        truncations["robot"] = trunc and not robot_done
+        infos = self._human_infos()
+        infos["robot"] = robot_info(self.world, res)
+        if self._renderer is not None:
+            self._renderer.record(self.world)
+        if robot_done or trunc:
+            self.agents = []
+        return obs, rewards, terminations, truncations, infos
+
+    def _observations(self) -> dict[str, dict[str, np.ndarray]]:
+        obs = {"robot": {k: v[0] for k, v in self._obs_builder.build(self.world).items()}}
+        if len(self.agents) > 1:
+            h = human_observations(self.world, 0)
+            for agent in self.agents[1:]:
+                i = int(agent.split("_")[1])
+                obs[agent] = {k: v[i] for k, v in h.items()}
+        return obs
+
+    def _human_infos(self) -> dict[str, dict[str, Any]]:
+        crowd = self.world.human_model.info()
+        infos: dict[str, dict[str, Any]] = {}
+        for agent in self.agents[1:]:
+            i = int(agent.split("_")[1])
+            infos[agent] = {k: v[0, i].item() for k, v in crowd.items()}
+        return infos
+
+    def state(self) -> np.ndarray:
+        """Global state ``(A * 7,)``: per agent [px, py, vx, vy, gx, gy, r] (robot first; padding slots parked)."""
+        w = self.world
+        return np.concatenate([w.pos[0], w.vel[0], w.goal[0], w.radius[0, :, None]], 1).astype(np.float32).ravel()
+
+    def render(self):
+        if self.render_mode is None:
+            return None
+        from crowdbench.render import Renderer
+
+        if self._renderer is None:
+            self._renderer = Renderer(self.world)
+            self._renderer.record(self.world)
+        return self._renderer.frame(self.world)
+
+    def close(self) -> None:
+        self._renderer = None
+
+
+def parallel_env(**kwargs: Any) -> CrowdParallelEnv:
+    """``crowdbench.parallel_env(layout="circle_crossing", num_humans=20, human_model="orca", ...)``."""
+    return CrowdParallelEnv(**kwargs)

@@ -1,0 +1,95 @@
+"""The paper's crowd: ORCA pedestrians whose response to the robot is latent and heterogeneous (§Environment Modeling).
+
+Per episode, pedestrian i draws a responsiveness ρᵢ ~ U(max(0, ρ − δ), min(1, ρ + δ)) around the crowd mean ρ.
+Per step, Iᵢ = 1 when the robot is inside pedestrian i's field of view (``fov`` about its heading) and within
+``sensing_range``; a candidate cᵢ ~ Bernoulli(ρᵢ·Iᵢ) is drawn, and the latent state ξᵢ switches to cᵢ only after
+``debounce`` (K) consecutive candidates disagree with it. With ξᵢ = 1 the robot (position and velocity) is in
+pedestrian i's ORCA neighbour set; with ξᵢ = 0 it is replaced by a dummy outside the interaction range, i.e. left out.
+Other pedestrians are always neighbours. ξ starts at 0 each episode.
+
+ρᵢ, Iᵢ and ξᵢ never reach the robot's observation; :meth:`ResponsiveORCA.info` exposes them for analysis.
+Change the crowd mean for all worlds between episodes with :meth:`ResponsiveORCA.set_responsiveness` (the training
+curriculum lowers it); it takes effect at each world's next reset.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from crowdbench.humans.base import CrowdState, register
+from crowdbench.humans.orca import ORCABase
+
+
+@register("responsive_orca")
+class ResponsiveORCA(ORCABase):
+    """Latent-responsive ORCA.
+
+    Args:
+        responsiveness: Crowd mean ρ ∈ [0, 1].
+        spread: δ, half-width of the per-pedestrian draw around ρ.
+        fov: Field of view about the heading [rad] (default π = 180°).
+        sensing_range: Pedestrians notice the robot only within this centre distance [m].
+        debounce: K, consecutive disagreeing candidates needed to flip ξ.
+        **orca: :class:`~crowdbench.humans.orca.ORCAParams` fields.
+    """
+
+    def __init__(self, responsiveness: float = 0.5, spread: float = 0.2, fov: float = math.pi,
+                 sensing_range: float = 5.0, debounce: int = 3, **orca) -> None:
+        super().__init__(**orca)
+        self.set_responsiveness(responsiveness)
+        if not 0.0 <= spread <= 1.0:
+            raise ValueError(f"spread must be in [0, 1], got {spread}")
+        if not 0.0 < fov <= 2 * math.pi:
+            raise ValueError(f"fov must be in (0, 2π] rad, got {fov}")
+        if debounce < 1:
+            raise ValueError(f"debounce must be ≥ 1, got {debounce}")
+        self.spread, self.fov, self.sensing_range, self.debounce = spread, fov, sensing_range, int(debounce)
+
+    def set_responsiveness(self, rho: float) -> None:
+        """Set the crowd mean ρ used from each world's next episode on."""
+        if not 0.0 <= rho <= 1.0:
+            raise ValueError(f"responsiveness must be in [0, 1], got {rho}")
+        self.responsiveness = float(rho)
+
+    def bind(self, num_worlds: int, num_humans: int, obstacles, time_step: float) -> None:
+        super().bind(num_worlds, num_humans, obstacles, time_step)
+        shape = (num_worlds, num_humans)
+        self.rho_i = np.zeros(shape)
+        self.visible = np.zeros(shape, dtype=bool)
+        self.xi = np.zeros(shape, dtype=bool)
+        self._streak = np.zeros(shape, dtype=np.int64)
+
+    def reset(self, worlds: np.ndarray, rngs: Sequence[np.random.Generator], state: CrowdState) -> None:
+        lo = max(0.0, self.responsiveness - self.spread)
+        hi = min(1.0, self.responsiveness + self.spread)
+        for b in worlds:
+            self.rho_i[b] = rngs[b].uniform(lo, hi, self.num_humans)
+        self.xi[worlds] = False
+        self.visible[worlds] = False
+        self._streak[worlds] = 0
+
+    def robot_in_view(self, state: CrowdState) -> np.ndarray:
+        """Iᵢ ``(B, H)``: robot within ``sensing_range`` and inside the field of view about each heading."""
+        rel = state.robot_position[:, None, :] - state.positions
+        dist = np.sqrt(rel[..., 0] ** 2 + rel[..., 1] ** 2)
+        ang = np.arctan2(rel[..., 1], rel[..., 0]) - state.headings
+        off = np.abs((ang + np.pi) % (2 * np.pi) - np.pi)
+        in_view = (off <= 0.5 * self.fov + 1e-12) if self.fov < 2 * math.pi else np.ones_like(off, dtype=bool)
+        return in_view & (dist <= self.sensing_range) & state.active & state.robot_visible
+
+    def robot_ignored(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
+        self.visible = self.robot_in_view(state)
+        u = np.stack([rng.random(self.num_humans) for rng in rngs])
+        candidate = u < self.rho_i * self.visible
+        disagree = candidate != self.xi
+        self._streak = np.where(disagree, self._streak + 1, 0)
+        flip = self._streak >= self.debounce
+        self.xi = np.where(flip, candidate, self.xi)
+        self._streak[flip] = 0
+        return ~self.xi | (not state.robot_visible)
+
+    def info(self) -> dict[str, np.ndarray]:
+        return {"rho_i": self.rho_i.copy(), "robot_in_view": self.visible.copy(), "xi": self.xi.copy()}

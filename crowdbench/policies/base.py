@@ -1,0 +1,55 @@
+"""The robot-policy plug-in contract.
+
+A robot policy maps a batch of robot observations to a batch of actions. It never holds or steps an environment.
+
+    class MyPolicy(RobotPolicy):
+        observation = "full_state"           # which observation builder it needs
+        def act(self, obs):                  # obs: dict of (B, ...) arrays
+            return np.zeros((len(obs["robot"]), 2))
+
+Register it with ``crowdbench.policies.register("mine", MyPolicy)`` or the entry-point group ``crowdbench.policies``.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import ClassVar
+
+import numpy as np
+
+from crowdbench.config import WorldConfig
+from crowdbench.registry import Registry
+
+
+class RobotPolicy(ABC):
+    """Base class of robot policies.
+
+    Class attributes:
+        observation: Name of the robot observation builder the policy consumes (``relative`` or ``full_state``).
+        kinematics: Robot kinematics the actions are meant for.
+    """
+
+    observation: ClassVar[str] = "relative"
+    kinematics: ClassVar[tuple[str, ...]] = ("holonomic",)
+
+    def __init__(self, config: WorldConfig | None = None) -> None:
+        self.config = config or WorldConfig()
+        if self.config.kinematics not in self.kinematics:
+            raise ValueError(f"{type(self).__name__} supports kinematics {self.kinematics}, "
+                             f"got {self.config.kinematics!r}")
+
+    def reset(self, done: np.ndarray | None = None) -> None:
+        """Forget per-episode state (e.g. recurrent memory) of worlds where ``done`` ``(B,)`` is True (all if None)."""
+
+    @abstractmethod
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        """Actions ``(B, 2)`` for observations ``obs`` (dict of ``(B, ...)`` arrays)."""
+
+
+POLICIES: Registry[RobotPolicy] = Registry("robot policy", "crowdbench.policies")
+register = POLICIES.register
+
+
+def make_policy(name: str, config: WorldConfig | None = None, **kwargs) -> RobotPolicy:
+    """Instantiate a robot policy by registry name."""
+    return POLICIES.get(name)(config=config, **kwargs)

@@ -1,0 +1,66 @@
+"""Classic (non-learned) robot policies: ``linear`` (straight to the goal) and ``orca`` (RVO2 on the full state)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from crowdbench.humans.base import preferred_velocity
+from crowdbench.humans.orca import ORCAParams
+from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
+from crowdbench.policies.base import RobotPolicy, register
+
+
+def _goal_velocity(robot: np.ndarray, dt: float) -> np.ndarray:
+    """Preferred velocity toward the goal from robot vectors ``(B, 9)`` = [px, py, r, gx, gy, v_pref, θ, vx, vy]."""
+    return preferred_velocity(robot[:, 0:2], robot[:, 3:5], robot[:, 5], dt)
+
+
+@register("linear")
+class LinearPolicy(RobotPolicy):
+    """Drive straight at the goal at v_pref, ignoring everyone (a lower bound)."""
+
+    observation = "relative"
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        return _goal_velocity(obs["robot"].astype(np.float64), self.config.time_step)
+
+
+@register("orca")
+class ORCAPolicy(RobotPolicy):
+    """The robot runs RVO2 ORCA among the observed pedestrians (full state: positions, velocities, radii),
+    as CrowdNav's ORCA baseline; it assumes the pedestrians reciprocate. Keyword arguments: :class:`ORCAParams`;
+    ``safety_space`` defaults to CrowdNav++'s 0.15 m for the robot (with 0 m it grazes pedestrians in dense
+    crossings: 26 % success among 20 ORCA pedestrians vs 93 % with 0.15 m, seeds 0–99). Static obstacles given in
+    ``config.obstacles`` are avoided too."""
+
+    observation = "full_state"
+
+    def __init__(self, config=None, **params) -> None:
+        super().__init__(config)
+        params.setdefault("safety_space", 0.15)
+        self.params = ORCAParams(**params)
+        self._obst = build_obstacles(self.config.obstacles)
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        p, cfg = self.params, self.config
+        robot = obs["robot"].astype(np.float64)
+        humans = obs["humans"].astype(np.float64)
+        valid = obs["mask"] > 0.5
+        B, N = valid.shape
+        A = N + 1
+        pad = p.radius_pad + p.safety_space
+        pos = np.concatenate([robot[:, None, 0:2], robot[:, None, 0:2] + humans[..., 0:2]], 1)
+        vel = np.concatenate([robot[:, None, 7:9], humans[..., 2:4]], 1)
+        rad = np.concatenate([robot[:, None, 2], humans[..., 4]], 1) + pad
+        pref = np.zeros((B, A, 2))
+        pref[:, 0] = _goal_velocity(robot, cfg.time_step)
+        vmax = np.repeat(robot[:, 5:6], A, 1)
+        active = np.concatenate([np.ones((B, 1), bool), valid], 1)
+        controlled = np.zeros((B, A), bool)
+        controlled[:, 0] = True
+        out = np.empty((B, A, 2))
+        orca_batch(pos, vel, pref, rad, vmax, np.full((B, A), p.neighbor_dist),
+                   np.full((B, A), p.max_neighbors, np.int64), np.full((B, A), p.time_horizon),
+                   np.full((B, A), p.time_horizon_obst), active, controlled, np.full((B, A), -1, np.int64),
+                   *self._obst, cfg.time_step, out)
+        return out[:, 0]
