@@ -3,9 +3,17 @@
 Per episode, pedestrian i draws a responsiveness ρᵢ ~ U(max(0, ρ − δ), min(1, ρ + δ)) around the crowd mean ρ.
 Per step, Iᵢ = 1 when the robot is inside pedestrian i's field of view (``fov`` about its heading) and within
 ``sensing_range``; a candidate cᵢ ~ Bernoulli(ρᵢ·Iᵢ) is drawn, and the latent state ξᵢ switches to cᵢ only after
-``debounce`` (K) consecutive candidates disagree with it. With ξᵢ = 1 the robot (position and velocity) is in
+``debounce`` (K) consecutive candidates disagree with it; at an episode's first step ξᵢ is initialised to the first
+candidate (there is nothing to debounce against yet). With ξᵢ = 1 the robot (position and velocity) is in
 pedestrian i's ORCA neighbour set; with ξᵢ = 0 it is replaced by a dummy outside the interaction range, i.e. left out.
-Other pedestrians are always neighbours. ξ starts at 0 each episode.
+Other pedestrians are always neighbours.
+
+Consequences worth knowing: by the paper's formula ρ = 0 with the default δ = 0.2 still draws ρᵢ ∈ [0, 0.2] — a
+few pedestrians respond now and then; with δ = 0, ρ = 0 reproduces ORCA with the robot absent exactly; ρ = 1 (δ = 0) with a 360° field of
+view and a sensing range ≥ ``neighbor_dist`` reproduces ORCA with a visible robot exactly. With K = 1 the long-run
+share of responsive steps is E[ρᵢ·Iᵢ]; with K > 1 and constant visibility it is the debounced chain's stationary
+share E₁/(E₀ + E₁), where E₀ = (1 − pᴷ)/((1 − p)·pᴷ) and E₁ is the same with p ↔ 1 − p (p = ρᵢ): 1/2 at p = 1/2,
+0.89 at p = 0.7, K = 3 — debouncing makes the crowd's responses persistent, as intended.
 
 ρᵢ, Iᵢ and ξᵢ never reach the robot's observation; :meth:`ResponsiveORCA.info` exposes them for analysis.
 Change the crowd mean for all worlds between episodes with :meth:`ResponsiveORCA.set_responsiveness` (the training
@@ -61,6 +69,7 @@ class ResponsiveORCA(ORCABase):
         self.visible = np.zeros(shape, dtype=bool)
         self.xi = np.zeros(shape, dtype=bool)
         self._streak = np.zeros(shape, dtype=np.int64)
+        self._fresh = np.ones(num_worlds, dtype=bool)
 
     def reset(self, worlds: np.ndarray, rngs: Sequence[np.random.Generator], state: CrowdState) -> None:
         lo = max(0.0, self.responsiveness - self.spread)
@@ -70,6 +79,7 @@ class ResponsiveORCA(ORCABase):
         self.xi[worlds] = False
         self.visible[worlds] = False
         self._streak[worlds] = 0
+        self._fresh[worlds] = True
 
     def robot_in_view(self, state: CrowdState) -> np.ndarray:
         """Iᵢ ``(B, H)``: robot within ``sensing_range`` and inside the field of view about each heading."""
@@ -86,9 +96,10 @@ class ResponsiveORCA(ORCABase):
         candidate = u < self.rho_i * self.visible
         disagree = candidate != self.xi
         self._streak = np.where(disagree, self._streak + 1, 0)
-        flip = self._streak >= self.debounce
+        flip = (self._streak >= self.debounce) | self._fresh[:, None]
         self.xi = np.where(flip, candidate, self.xi)
         self._streak[flip] = 0
+        self._fresh[:] = False
         return ~self.xi | (not state.robot_visible)
 
     def info(self) -> dict[str, np.ndarray]:

@@ -37,6 +37,8 @@ class Layout(ABC):
     robot_start: tuple[float, float] = (0.0, -6.0)
     robot_goal: tuple[float, float] = (0.0, 6.0)
     half_size: float = 7.0
+    separate_goals: ClassVar[bool] = True
+    """Whether goals must be as far apart as starts (False for layouts whose goals lie on a shared exit line)."""
 
     def obstacles(self) -> tuple[Polygon, ...]:
         """Static obstacles of the layout (vertex lists, metres); none by default."""
@@ -105,9 +107,9 @@ def place_without_overlap(
         for _ in range(rounds):
             s, g = layout.candidates(rng, i, n, pool)
             ok = np.ones(pool, dtype=bool)
-            for pts, acc in ((s, starts[:i]), (g, goals[:i])):
+            for pts, acc, separate in ((s, starts[:i], True), (g, goals[:i], layout.separate_goals)):
                 ok &= (np.linalg.norm(pts[:, None] - robot_pts[None], axis=-1) >= d_hr).all(axis=1)
-                if i:
+                if i and separate:
                     ok &= (np.linalg.norm(pts[:, None] - acc[None], axis=-1) >= d_hh).all(axis=1)
             if len(edges):
                 for pts in (s, g):
@@ -175,16 +177,20 @@ class SquareCrossing(Layout):
 
 
 class _Streams(Layout):
-    """Pedestrians enter in bands along the arena boundary and walk to the opposite boundary; on arrival they turn
-    round (the new goal is the mirror of the reached one), so density holds. Band depth grows with the crowd so the
-    band can always hold its share.
+    """Pedestrians enter in bands along the arena boundary and walk straight across to a goal on the opposite
+    boundary line (same lateral offset); on arrival they turn round (the goal is mirrored along the stream axis), so
+    density holds. Band depth grows with the crowd so the band can always hold its share.
     """
 
-    half_size = 6.0
+    half_size = 7.0
+    extent = 6.0
+    """Streams enter and leave on the lines at ±``extent`` [m] (inside the 14 m arena)."""
     lane_half_width = 3.5
+    separate_goals = False
 
     def _depth(self, n_stream: int) -> float:
-        return float(min(self.half_size, max(2.0, 2.0 * n_stream * 0.8**2 / (2 * self.lane_half_width))))
+        # random sequential placement fills ~half the area: give each pedestrian ~3.5 spacing² of band
+        return float(min(self.extent, max(2.0, 3.5 * n_stream * 0.8**2 / (2 * self.lane_half_width))))
 
     def _stream(self, index: int, n: int) -> tuple[np.ndarray, np.ndarray, int]:
         """(entry direction unit vector, lane axis unit vector, pedestrians in this stream)."""
@@ -193,19 +199,22 @@ class _Streams(Layout):
     def candidates(self, rng, index, n, m):
         direction, lane, k = self._stream(index, n)
         depth = self._depth(k)
-        along = -self.half_size + rng.uniform(0, depth, m)
+        along = -self.extent + rng.uniform(0, depth, m)
         across = rng.uniform(-self.lane_half_width, self.lane_half_width, m)
         s = along[:, None] * direction + across[:, None] * lane
-        g = self.half_size * direction + across[:, None] * lane
+        g = self.extent * direction + across[:, None] * lane
         return s, np.broadcast_to(g, s.shape).copy()
 
     def renew_goals(self, rng, positions, goals):
-        return -goals
+        new = goals.copy()
+        axis = np.argmax(np.abs(goals), axis=1)  # the stream axis: where the goal sits on the boundary line
+        new[np.arange(len(new)), axis] *= -1.0
+        return new
 
 
 @register("intersection")
 class Intersection(_Streams):
-    """Test-only. Two orthogonal streams in a 12 m arena: even-indexed pedestrians walk west→east in the band
+    """Test-only. Two orthogonal streams crossing a 12 m square: even-indexed pedestrians walk west→east in the band
     ``|y| ≤ 3.5`` m, odd-indexed ones north→south in the band ``|x| ≤ 3.5`` m, each entering from its boundary;
     the robot crosses both from (0, -6) to (0, 6).
     """
@@ -240,7 +249,7 @@ class RandomWander(Layout):
     """
 
     name = "random_wander"
-    half_size = 6.0
+    half_size = 7.0
 
     def __init__(self, extent: float = 5.5) -> None:
         self.extent = extent

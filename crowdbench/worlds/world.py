@@ -94,6 +94,7 @@ class CrowdWorld:
             walls = tuple((corners[i], corners[(i + 1) % 4]) for i in range(4))
         self.obstacles = tuple(self.layout.obstacles()) + walls + tuple(config.obstacles)
         self.edges = obstacle_edges(self.obstacles)  # (S, 2, 2)
+        self._check_robot_clear(config.robot_radius)
         self.dt = config.time_step
 
         self.pos = np.zeros((B, A, 2))
@@ -108,6 +109,7 @@ class CrowdWorld:
         self.steps = np.zeros(B, dtype=np.int64)
         self.prev_goal_dist = np.zeros(B)
         self.rngs: list[np.random.Generator] = [np.random.default_rng(0) for _ in range(B)]
+        self.model_rngs: list[np.random.Generator] = [np.random.default_rng(0) for _ in range(B)]
         park_x, park_y = np.meshgrid(PARK + 3.0 * np.arange(A), PARK + 3.0 * np.arange(B))
         self._park = np.stack([park_x, park_y], -1)  # (B, A, 2): distinct, far-away slots
 
@@ -115,6 +117,18 @@ class CrowdWorld:
         self.human_model.bind(B, H, self.obstacles, self.dt)
         self.reset(seeds=list(range(B)))
         self.physics.verify()
+
+    def _check_robot_clear(self, radius: float) -> None:
+        from crowdbench.geometry import point_segment_distance
+        from crowdbench.worlds.layouts import _inside_polygons
+
+        pts = np.array([self.layout.robot_start, self.layout.robot_goal], dtype=np.float64)
+        if len(self.edges):
+            d = point_segment_distance(pts[:, None], self.edges[None, :, 0], self.edges[None, :, 1]).min(axis=1)
+            bad = (d <= radius) | _inside_polygons(pts, self.obstacles)
+            if bad.any():
+                raise ValueError(f"obstacles: the robot's {'start' if bad[0] else 'goal'} "
+                                 f"{tuple(pts[int(not bad[0])])} lies on or within {radius} m of an obstacle")
 
     def space(self, world: int) -> pymunk.Space:
         """The pymunk space of world ``world`` (for spatial queries and custom physics; keep it in sync yourself)."""
@@ -139,7 +153,9 @@ class CrowdWorld:
 
         Args:
             seeds: One seed per selected world (or one int for a single selected world). World ``b``'s episode
-                generator is ``np.random.default_rng(seed)``; ``None`` draws fresh entropy.
+                generator is ``np.random.default_rng(seed)`` (layout placement, goal renewal); ``None`` draws fresh
+                entropy. The pedestrian model gets a child stream spawned from it (``rng.spawn(1)``), so a model's
+                draws never shift the layout's: models with and without randomness see identical crowds.
             mask: ``(B,)`` bool, the worlds to reset (default: all).
 
         """
@@ -151,6 +167,7 @@ class CrowdWorld:
         cfg, lay = self.config, self.layout
         for b, seed in zip(idx, seeds, strict=True):
             rng = self.rngs[b] = np.random.default_rng(seed)
+            self.model_rngs[b] = rng.spawn(1)[0]
             n = cfg.num_humans if cfg.humans_range is None else int(rng.integers(cfg.humans_range[0],
                                                                                    cfg.humans_range[1] + 1))
             starts, goals = lay.sample(rng, n, cfg.human_radius, cfg.robot_radius, self.obstacles)
@@ -166,7 +183,26 @@ class CrowdWorld:
         self.steps[idx] = 0
         self.prev_goal_dist[idx] = self.goal_distance()[idx]
         self.physics.set_positions(idx, self.pos[idx])
-        self.human_model.reset(idx, self.rngs, self.crowd_state())
+        self.human_model.reset(idx, self.model_rngs, self.crowd_state())
+
+    def set_agents(self, world: int, positions: np.ndarray | None = None, velocities: np.ndarray | None = None,
+                   goals: np.ndarray | None = None) -> None:
+        """Script the state of world ``world`` (scenario set-up, tests): arrays ``(A, 2)`` for agents
+        ``[robot, human_0, ...]`` [m, m/s]; rows for inactive slots are ignored. Keeps pymunk in sync and resets the
+        progress reference to the new goal distance."""
+        act = self.active[world]
+        if positions is not None:
+            self.pos[world, act] = np.asarray(positions, dtype=np.float64)[act]
+            self.physics.set_positions(np.array([world]), self.pos[world][None])
+        if velocities is not None:
+            self.vel[world, act] = np.asarray(velocities, dtype=np.float64)[act]
+        if goals is not None:
+            self.goal[world, act] = np.asarray(goals, dtype=np.float64)[act]
+        self.prev_goal_dist[world] = self.goal_distance()[world]
+
+    def physics_positions(self) -> np.ndarray:
+        """Agent positions as stored in the pymunk bodies, ``(B, A, 2)`` [m] (equal to :attr:`pos`)."""
+        return np.array([[tuple(b.position) for b in s.agent_bodies] for s in self.physics.spaces])
 
     # ------------------------------------------------------------------ step
     def robot_velocity(self, action: np.ndarray) -> np.ndarray:
@@ -203,7 +239,7 @@ class CrowdWorld:
         vel[:, 0] = self.robot_velocity(robot_action)
         if self.num_humans:
             state = self.crowd_state()
-            hv = self.human_model.step(state, self.rngs)
+            hv = self.human_model.step(state, self.model_rngs)
             if human_override is not None and human_override.any():
                 hv = np.where(human_override[..., None], human_actions, hv)
             vel[:, 1:] = _clip_norm(hv, self.v_pref[:, 1:])
