@@ -9,8 +9,9 @@ pedestrian i's ORCA neighbour set; with ξᵢ = 0 it is replaced by a dummy outs
 Other pedestrians are always neighbours.
 
 Consequences worth knowing: by the paper's formula ρ = 0 with the default δ = 0.2 still draws ρᵢ ∈ [0, 0.2] — a
-few pedestrians respond now and then; with δ = 0, ρ = 0 reproduces ORCA with the robot absent exactly; ρ = 1 (δ = 0) with a 360° field of
-view and a sensing range ≥ ``neighbor_dist`` reproduces ORCA with a visible robot exactly. With K = 1 the long-run
+few pedestrians respond now and then; with δ = 0, ρ = 0 reproduces ORCA with the robot absent exactly; ρ = 1 (δ = 0)
+with a 360° field of view and a sensing range ≥ ``neighbor_dist`` reproduces ORCA with a visible robot exactly.
+With K = 1 the long-run
 share of responsive steps is E[ρᵢ·Iᵢ]; with K > 1 and constant visibility it is the debounced chain's stationary
 share E₁/(E₀ + E₁), where E₀ = (1 − pᴷ)/((1 − p)·pᴷ) and E₁ is the same with p ↔ 1 − p (p = ρᵢ): 1/2 at p = 1/2,
 0.89 at p = 0.7, K = 3 — debouncing makes the crowd's responses persistent, as intended.

@@ -1,0 +1,165 @@
+"""ORCA: reference RVO2 trajectories, behaviour (swaps, deadlock, obstacles), the Python-RVO2 facade."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from crowdbench.config import WorldConfig
+from crowdbench.humans.orca import PyRVOSimulator
+from crowdbench.worlds import CrowdWorld
+
+
+def pref_velocity(pos, goal, max_speed, dt):
+    d = np.asarray(goal) - np.asarray(pos)
+    dist = np.hypot(*d)
+    return d / dt if dist < max_speed * dt else d / dist * max_speed
+
+
+def run_reference(ref, use_stored_pref=False):
+    p = ref["params"]
+    sim = PyRVOSimulator(p["timeStep"], p["neighborDist"], p["maxNeighbors"], p["timeHorizon"], p["timeHorizonObst"],
+                         p["radius"], p["maxSpeed"])
+    for s in ref["starts"]:
+        sim.addAgent(tuple(s))
+    pos, vel = [np.array(ref["starts"], float)], [np.zeros((len(ref["starts"]), 2))]
+    for k in range(ref["num_steps"]):
+        for i, g in enumerate(ref["goals"]):
+            pv = ref["pref_velocities"][k][i] if use_stored_pref else pref_velocity(sim.getAgentPosition(i), g,
+                                                                                   p["maxSpeed"], p["timeStep"])
+            sim.setAgentPrefVelocity(i, tuple(pv))
+        sim.doStep()
+        pos.append(np.array([sim.getAgentPosition(i) for i in range(sim.getNumAgents())]))
+        vel.append(np.array([sim.getAgentVelocity(i) for i in range(sim.getNumAgents())]))
+    return np.array(pos), np.array(vel)
+
+
+@pytest.mark.parametrize("scenario", ["headon2", "circle8"])
+def test_matches_rvo2_float64_within_1e6(orca_reference, scenario):
+    ref = orca_reference[scenario]
+    pos, vel = run_reference(ref)
+    np.testing.assert_allclose(pos, np.array(ref["float64_variant"]["positions"]), atol=1e-6, rtol=0)
+    np.testing.assert_allclose(vel, np.array(ref["float64_variant"]["velocities"]), atol=1e-6, rtol=0)
+
+
+@pytest.mark.parametrize("scenario", ["headon2", "circle8"])
+def test_matches_rvo2_float32_within_1e4(orca_reference, scenario):
+    ref = orca_reference[scenario]
+    pos, _ = run_reference(ref, use_stored_pref=True)
+    np.testing.assert_allclose(pos, np.array(ref["positions"]), atol=1e-4, rtol=0)
+
+
+def test_circle8_deadlock_is_reproduced(orca_reference):
+    ref = orca_reference["circle8"]
+    pos, vel = run_reference(ref)
+    final = pos[-1]
+    assert np.allclose(np.linalg.norm(final, axis=1), 0.84, atol=0.05)  # stalled on a ring of radius ~0.84 m
+    assert np.linalg.norm(vel[-1], axis=1).max() < 0.02  # speed -> 0 (preferred speed is 1 m/s)
+    assert np.linalg.norm(pos[-1] - pos[-21], axis=1).max() < 0.1  # nobody got anywhere in the last 5 s
+    assert np.allclose(np.linalg.norm(final - np.array(ref["goals"]), axis=1), ref["final_distance_to_goal"], atol=1e-4)
+
+
+def _min_pair_gap(pos, radius):
+    d = np.linalg.norm(pos[:, :, None] - pos[:, None], axis=-1) + np.eye(pos.shape[1]) * 1e9
+    return d.min() - 2 * radius
+
+
+def test_head_on_swap_no_overlap_both_arrive():
+    sim = PyRVOSimulator(0.25, 10, 10, 5, 5, 0.3, 1.0)
+    starts, goals = [(-4, 0), (4, 0.01)], [(4, 0), (-4, 0.01)]
+    for s in starts:
+        sim.addAgent(s)
+    traj = []
+    for _ in range(60):
+        for i, g in enumerate(goals):
+            sim.setAgentPrefVelocity(i, tuple(pref_velocity(sim.getAgentPosition(i), g, 1.0, 0.25)))
+        sim.doStep()
+        traj.append([sim.getAgentPosition(i) for i in range(2)])
+    traj = np.array(traj)
+    assert _min_pair_gap(traj, 0.3) > 0.005  # the reference sidesteps with 0.609 m between centres
+    np.testing.assert_allclose(traj[-1], goals, atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(10))
+def test_perturbed_circle_swap_no_overlap_all_arrive(seed):
+    """6 agents on a radius-4 circle, angles jittered by ±0.2 rad to break the symmetry that deadlocks circle-8:
+    ORCA resolves every one of these swaps; discs may touch (gap ~1e-10) but never overlap."""
+    n, R = 6, 4.0
+    rng = np.random.default_rng(seed)
+    ang = 2 * np.pi * np.arange(n) / n + rng.uniform(-0.2, 0.2, n)
+    starts = R * np.stack([np.cos(ang), np.sin(ang)], 1)
+    goals = -starts
+    sim = PyRVOSimulator(0.25, 10, 10, 5, 5, 0.3, 1.0)
+    for s in starts:
+        sim.addAgent(tuple(s))
+    traj = []
+    for _ in range(240):
+        for i in range(n):
+            sim.setAgentPrefVelocity(i, tuple(pref_velocity(sim.getAgentPosition(i), goals[i], 1.0, 0.25)))
+        sim.doStep()
+        traj.append([sim.getAgentPosition(i) for i in range(n)])
+    traj = np.array(traj)
+    assert _min_pair_gap(traj, 0.3) > -1e-9
+    np.testing.assert_allclose(traj[-1], goals, atol=1e-6)
+
+
+@pytest.mark.parametrize(("goal", "arrives"), [((2.0, 3.0), True), ((0.2, 3.0), False)])
+def test_obstacle_is_never_entered(goal, arrives):
+    """A box between start and goal. Seen obliquely the agent slides round its corner and arrives; head-on it stops
+    in front of it — RVO2 is a local method with no global planner (its examples add a roadmap). Either way it keeps
+    its radius from the box."""
+    sim = PyRVOSimulator(0.25, 10, 10, 5, 5, 0.3, 1.0)
+    sim.addAgent((0.0, -3.0))
+    sim.addObstacle([(-1.5, -0.1), (1.5, -0.1), (1.5, 0.1), (-1.5, 0.1)])  # counter-clockwise box
+    sim.processObstacles()
+    assert sim.getNumObstacleVertices() == 4
+    closest = np.inf
+    for _ in range(120):
+        sim.setAgentPrefVelocity(0, tuple(pref_velocity(sim.getAgentPosition(0), goal, 1.0, 0.25)))
+        sim.doStep()
+        x, y = sim.getAgentPosition(0)
+        closest = min(closest, np.hypot(max(abs(x) - 1.5, 0.0), max(abs(y) - 0.1, 0.0)))
+    assert closest >= 0.3 - 1e-9
+    at_goal = np.hypot(*(np.subtract(sim.getAgentPosition(0), goal))) < 1e-6
+    assert at_goal == arrives
+
+
+def test_facade_api_shape():
+    sim = PyRVOSimulator(0.1, 5, 4, 2, 2, 0.4, 2.0)
+    a = sim.addAgent((1, 2))
+    b = sim.addAgent((3, 4), 5, 4, 2, 2, 0.5, 1.5, (0.1, 0.0))
+    assert (a, b, sim.getNumAgents()) == (0, 1, 2)
+    assert sim.getAgentRadius(1) == 0.5 and sim.getAgentMaxSpeed(1) == 1.5
+    assert sim.getAgentVelocity(1) == (0.1, 0.0)
+    sim.setAgentPosition(0, (0, 0))
+    sim.setAgentVelocity(0, (0.5, 0))
+    sim.doStep()
+    assert sim.getGlobalTime() == pytest.approx(0.1)
+    with pytest.raises(IndexError, match="agent_no=5"):
+        sim.getAgentPosition(5)
+
+
+def test_world_orca_equals_facade():
+    """The world's batched ORCA pedestrians (robot invisible) follow exactly what PyRVOSimulator computes."""
+    w = CrowdWorld(WorldConfig(num_humans=12, robot_visible=False, time_limit=1e9), 1, "circle_crossing", "orca")
+    sim = PyRVOSimulator(0.25, 10, 10, 5, 5, 0.31, 1.0)
+    for i in range(12):
+        sim.addAgent(tuple(w.pos[0, i + 1]))
+    for _ in range(120):
+        for i in range(12):
+            sim.setAgentPrefVelocity(i, tuple(pref_velocity(sim.getAgentPosition(i), w.goal[0, i + 1], 1.0, 0.25)))
+        sim.doStep()
+        w.step(np.zeros((1, 2)))
+        np.testing.assert_allclose([sim.getAgentPosition(i) for i in range(12)], w.pos[0, 1:], atol=1e-9)
+
+
+def test_orca_pedestrians_avoid_world_walls():
+    box = ((-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0))
+    w = CrowdWorld(WorldConfig(num_humans=12, obstacles=(box,), time_limit=1e9, robot_visible=False), 2,
+                   "circle_crossing", "orca")
+    from crowdbench.geometry import point_segment_distance
+
+    for _ in range(160):
+        w.step(np.zeros((2, 2)))
+        d = point_segment_distance(w.pos[:, 1:, None], w.edges[None, None, :, 0], w.edges[None, None, :, 1])
+        assert d.min() >= 0.3 - 1e-6  # ORCA's obstacle lines keep them off the box (the clamp never needed)
