@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
-import tempfile
 
 import numpy as np
 
 from crowdbench.humans import HUMAN_MODELS
+from crowdbench.io import write_text
 from crowdbench.policies import POLICIES, make_policy
 from crowdbench.worlds import LAYOUTS
 
@@ -71,10 +70,7 @@ def evaluate(args: argparse.Namespace) -> int:
         print(f"{k:>15}: {v:.4f}" if isinstance(v, float) else f"{k:>15}: {v}")
     if args.json:
         result = {"args": {k: v for k, v in vars(args).items() if k != "func"}, "summary": summary}
-        fd, tmp = tempfile.mkstemp(dir=os.path.dirname(os.path.abspath(args.json)) or ".", suffix=".json")
-        with os.fdopen(fd, "w") as f:
-            json.dump(result, f, indent=2)
-        os.replace(tmp, args.json)
+        write_text(args.json, json.dumps(result, indent=2) + "\n")
     return 0
 
 

@@ -6,11 +6,12 @@ Rendering only reads the world's state: it never changes what the simulation doe
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Sequence
 
 import numpy as np
 from PIL import Image, ImageDraw
+
+from crowdbench.io import atomic_path
 
 ROBOT = (230, 160, 20)
 HUMAN = (70, 110, 200)
@@ -73,6 +74,12 @@ class Renderer:
         r = world.radius[0, 0] * s
         d.ellipse([rx - r, ry - r, rx + r, ry + r], fill=ROBOT, outline=(20, 20, 20))
         d.text((6, 6), f"t = {world.steps[0] * world.dt:5.2f} s", fill=(0, 0, 0))
+        legend = [(ROBOT, "robot"), (HUMAN, "pedestrian"), (RESPONSIVE, "responsive (xi=1)"), (GOAL, "goal")]
+        x = 6
+        for color, label in legend:
+            d.ellipse([x, self.size - 16, x + 9, self.size - 7], fill=color)
+            d.text((x + 13, self.size - 18), label, fill=(0, 0, 0))
+            x += 20 + 6 * len(label)
         return np.asarray(img, dtype=np.uint8)
 
 
@@ -81,12 +88,5 @@ def save_gif(frames: Sequence[np.ndarray], path: str | os.PathLike, fps: float =
     if not frames:
         raise ValueError("save_gif needs at least one frame")
     images = [Image.fromarray(f) for f in frames]
-    path = os.fspath(path)
-    fd, tmp = tempfile.mkstemp(suffix=".gif", dir=os.path.dirname(os.path.abspath(path)))
-    os.close(fd)
-    try:
+    with atomic_path(path, suffix=".gif") as tmp:
         images[0].save(tmp, save_all=True, append_images=images[1:], duration=int(1000 / fps), loop=0)
-        os.replace(tmp, path)
-    except BaseException:
-        os.unlink(tmp)
-        raise

@@ -45,6 +45,9 @@ class ResponsiveORCA(ORCABase):
         **orca: :class:`~crowdbench.humans.orca.ORCAParams` fields.
     """
 
+    BLOCK = 64
+    """Steps of Bernoulli uniforms drawn at once per world (one generator call per world per BLOCK steps)."""
+
     def __init__(self, responsiveness: float = 0.5, spread: float = 0.2, fov: float = math.pi,
                  sensing_range: float = 5.0, debounce: int = 3, **orca) -> None:
         super().__init__(**orca)
@@ -71,6 +74,9 @@ class ResponsiveORCA(ORCABase):
         self.xi = np.zeros(shape, dtype=bool)
         self._streak = np.zeros(shape, dtype=np.int64)
         self._fresh = np.ones(num_worlds, dtype=bool)
+        # uniforms for the Bernoulli candidates, pre-drawn per world in blocks of BLOCK steps
+        self._u = np.zeros((num_worlds, self.BLOCK, num_humans))
+        self._cursor = np.full(num_worlds, self.BLOCK, dtype=np.int64)
 
     def reset(self, worlds: np.ndarray, rngs: Sequence[np.random.Generator], state: CrowdState) -> None:
         lo = max(0.0, self.responsiveness - self.spread)
@@ -81,6 +87,7 @@ class ResponsiveORCA(ORCABase):
         self.visible[worlds] = False
         self._streak[worlds] = 0
         self._fresh[worlds] = True
+        self._cursor[worlds] = self.BLOCK
 
     def robot_in_view(self, state: CrowdState) -> np.ndarray:
         """Iᵢ ``(B, H)``: robot within ``sensing_range`` and inside the field of view about each heading."""
@@ -93,7 +100,11 @@ class ResponsiveORCA(ORCABase):
 
     def robot_ignored(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         self.visible = self.robot_in_view(state)
-        u = np.stack([rng.random(self.num_humans) for rng in rngs])
+        for b in np.flatnonzero(self._cursor >= self.BLOCK):
+            self._u[b] = rngs[b].random((self.BLOCK, self.num_humans))
+            self._cursor[b] = 0
+        u = self._u[np.arange(self.num_worlds), self._cursor]
+        self._cursor += 1
         candidate = u < self.rho_i * self.visible
         disagree = candidate != self.xi
         self._streak = np.where(disagree, self._streak + 1, 0)

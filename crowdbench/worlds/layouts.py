@@ -48,9 +48,16 @@ class Layout(ABC):
     def candidates(self, rng: np.random.Generator, index: int, n: int, m: int) -> tuple[np.ndarray, np.ndarray]:
         """Draw ``m`` candidate (start, goal) pairs for pedestrian ``index`` of ``n``: two ``(m, 2)`` arrays [m]."""
 
+    renew_uniforms: ClassVar[int] = 0
+    """How many U[0, 1) numbers :meth:`renew_goals` consumes per pedestrian."""
+
     @abstractmethod
-    def renew_goals(self, rng: np.random.Generator, positions: np.ndarray, goals: np.ndarray) -> np.ndarray:
-        """New goals ``(k, 2)`` for ``k`` pedestrians at ``positions`` ``(k, 2)`` that reached ``goals`` ``(k, 2)``."""
+    def renew_goals(self, u: np.ndarray, positions: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """New goals ``(k, 2)`` for ``k`` pedestrians at ``positions`` ``(k, 2)`` that reached ``goals`` ``(k, 2)``.
+
+        ``u`` ``(k, renew_uniforms)`` are uniform draws from each pedestrian's world generator: the world draws
+        them (one call per world) so that this method is vectorised over all worlds at once.
+        """
 
     def sample(
         self,
@@ -87,8 +94,8 @@ def place_without_overlap(
     human_radius: float,
     robot_radius: float,
     obstacles: Sequence[Polygon] = (),
-    pool: int = 24,
-    rounds: int = 12,
+    pool: int = 32,
+    rounds: int = 48,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Greedy bounded dart-throwing.
 
@@ -145,10 +152,11 @@ class CircleCrossing(Layout):
         s = self.radius * np.stack([np.cos(ang), np.sin(ang)], 1) + rng.uniform(-self.noise, self.noise, (m, 2))
         return s, -s
 
-    def renew_goals(self, rng, positions, goals):
-        ang = np.arctan2(-positions[:, 1], -positions[:, 0]) + rng.uniform(-math.pi / 4, math.pi / 4, len(positions))
-        return self.radius * np.stack([np.cos(ang), np.sin(ang)], 1) + rng.uniform(
-            -self.noise, self.noise, (len(positions), 2))
+    renew_uniforms = 3
+
+    def renew_goals(self, u, positions, goals):
+        ang = np.arctan2(-positions[:, 1], -positions[:, 0]) + (u[:, 0] - 0.5) * (math.pi / 2)
+        return self.radius * np.stack([np.cos(ang), np.sin(ang)], 1) + (u[:, 1:3] - 0.5) * (2 * self.noise)
 
 
 @register("square_crossing")
@@ -172,8 +180,11 @@ class SquareCrossing(Layout):
         sign = np.where(rng.random(m) > 0.5, -1.0, 1.0)
         return self._half(rng, sign), self._half(rng, -sign)
 
-    def renew_goals(self, rng, positions, goals):
-        return self._half(rng, np.where(positions[:, 0] >= 0, -1.0, 1.0))
+    renew_uniforms = 2
+
+    def renew_goals(self, u, positions, goals):
+        sign = np.where(positions[:, 0] >= 0, -1.0, 1.0)
+        return np.stack([u[:, 0] * self.width / 2 * sign, (u[:, 1] - 0.5) * self.width], 1)
 
 
 class _Streams(Layout):
@@ -205,7 +216,7 @@ class _Streams(Layout):
         g = self.extent * direction + across[:, None] * lane
         return s, np.broadcast_to(g, s.shape).copy()
 
-    def renew_goals(self, rng, positions, goals):
+    def renew_goals(self, u, positions, goals):
         new = goals.copy()
         axis = np.argmax(np.abs(goals), axis=1)  # the stream axis: where the goal sits on the boundary line
         new[np.arange(len(new)), axis] *= -1.0
@@ -260,8 +271,10 @@ class RandomWander(Layout):
     def candidates(self, rng, index, n, m):
         return self._uniform(rng, m), self._uniform(rng, m)
 
-    def renew_goals(self, rng, positions, goals):
-        return self._uniform(rng, len(positions))
+    renew_uniforms = 2
+
+    def renew_goals(self, u, positions, goals):
+        return (2 * u - 1) * self.extent
 
 
 def make_layout(name: str | Layout, **kwargs) -> Layout:

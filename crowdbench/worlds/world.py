@@ -303,14 +303,21 @@ class CrowdWorld:
         return StepResult(reward, terms, terminated, truncated, outcome, d_min, overlaps, robot_hit)
 
     def _renew_goals(self) -> None:
-        """Pedestrians within one radius of their goal get a new one by the layout's rule."""
+        """Pedestrians within one radius of their goal get a new one by the layout's rule (vectorised over worlds;
+        the uniforms come from each world's own generator, one call per world that needs any)."""
         hp, hg = self.pos[:, 1:], self.goal[:, 1:]
-        reached = self.active[:, 1:] & (norm(hg - hp) <= self.radius[:, 1:])
+        d = hg - hp
+        reached = self.active[:, 1:] & (d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] <= self.radius[:, 1:] ** 2)
         if not reached.any():
             return
-        for b in np.flatnonzero(reached.any(axis=1)):
-            i = np.flatnonzero(reached[b]) + 1
-            self.goal[b, i] = self.layout.renew_goals(self.rngs[b], self.pos[b, i], self.goal[b, i])
+        bi, hi = np.nonzero(reached)  # sorted by world, then pedestrian
+        m = self.layout.renew_uniforms
+        if m:
+            worlds, counts = np.unique(bi, return_counts=True)
+            u = np.concatenate([self.rngs[b].random((c, m)) for b, c in zip(worlds, counts, strict=True)])
+        else:
+            u = np.empty((len(bi), 0))
+        self.goal[bi, hi + 1] = self.layout.renew_goals(u, self.pos[bi, hi + 1], self.goal[bi, hi + 1])
 
 
 def _clip_norm(v: np.ndarray, vmax: np.ndarray) -> np.ndarray:
