@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 
 import numpy as np
@@ -61,7 +62,10 @@ def evaluate(args: argparse.Namespace) -> int:
     """Batched evaluation of a registered policy; prints the paper's six metrics (optionally writes JSON)."""
     from crowdbench.evaluation import run_episodes, summarize
 
-    policy = make_policy(args.policy)
+    kwargs = {"checkpoint": args.checkpoint} if args.checkpoint else {}
+    if args.checkpoint and args.policy != "h2int":
+        raise ValueError("--checkpoint applies to --policy h2int")
+    policy = make_policy(args.policy, **kwargs)
     eps = run_episodes(policy, args.episodes, seed=args.seed, num_worlds=args.worlds, layout=args.layout,
                        num_humans=args.humans, human_model=args.human_model,
                        human_model_kwargs=_model_kwargs(args.human_model, args.responsiveness))
@@ -71,6 +75,52 @@ def evaluate(args: argparse.Namespace) -> int:
     if args.json:
         result = {"args": {k: v for k, v in vars(args).items() if k != "func"}, "summary": summary}
         write_text(args.json, json.dumps(result, indent=2) + "\n")
+    return 0
+
+
+def train_cmd(args: argparse.Namespace) -> int:
+    """Train H²INT (or an ablation) with rsl-rl PPO; checkpoints, curve and logs go to ``--out``."""
+    import dataclasses
+
+    from crowdbench.training.train import TrainConfig, train
+
+    if args.algo != "h2int":
+        raise ValueError(f"train: unknown algorithm {args.algo!r}; valid choices: h2int")
+    overrides = {"variant": args.variant, "seed": args.seed, "anneal": not args.no_anneal}
+    for name in ("iterations", "minutes", "envs"):
+        value = getattr(args, name)
+        if value is not None:
+            overrides["num_envs" if name == "envs" else name] = value
+    if args.resume:
+        from crowdbench.policies.h2int import load_checkpoint
+
+        path = os.path.join(args.resume, "last.pt") if os.path.isdir(args.resume) else args.resume
+        saved = load_checkpoint(path)["train_config"]
+        saved["humans_range"] = tuple(saved["humans_range"])
+        saved["head_dims"] = tuple(saved["head_dims"])
+        cfg = TrainConfig(**{**saved, **{k: v for k, v in overrides.items() if getattr(args, "_set_" + k, False)}})
+        for name in ("iterations", "minutes"):
+            if getattr(args, name) is not None:
+                cfg = dataclasses.replace(cfg, **{name: getattr(args, name)})
+        out = args.out or os.path.dirname(os.path.abspath(path))
+    else:
+        cfg = TrainConfig(**overrides)
+        out = args.out or os.path.join("runs", f"{cfg.variant}-seed{cfg.seed}")
+    print(f"training {cfg.variant} seed={cfg.seed} → {out}")
+    trainer = train(cfg, out, resume=args.resume)
+    print(f"wrote {os.path.join(out, 'last.pt')} and {os.path.join(out, 'curve.png')} "
+          f"({trainer.iteration} iterations, {trainer.env_steps:,} env steps, {trainer.elapsed / 60:.1f} min)")
+    return 0
+
+
+def export_cmd(args: argparse.Namespace) -> int:
+    """Export a checkpoint to TorchScript and ONNX (recurrent: hidden state in and out)."""
+    from crowdbench.policies.deploy import export_onnx, export_torchscript
+
+    os.makedirs(args.out, exist_ok=True)
+    ts = export_torchscript(args.checkpoint, os.path.join(args.out, "policy.pt"))
+    onnx = export_onnx(args.checkpoint, os.path.join(args.out, "policy.onnx"))
+    print(f"wrote {ts} and {onnx}")
     return 0
 
 
@@ -86,7 +136,23 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--episodes", type=int, default=100)
     p.add_argument("--worlds", type=int, default=16, help="worlds stepped together")
     p.add_argument("--json", default=None, help="write the summary to this JSON file")
+    p.add_argument("--checkpoint", default=None, help="H²INT checkpoint to evaluate (with --policy h2int)")
     p.set_defaults(func=evaluate)
+    p = sub.add_parser("train", help="train H²INT with rsl-rl PPO")
+    p.add_argument("algo", help="h2int")
+    p.add_argument("--variant", default="h2int", help="h2int, flat, meanpool or standard")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
+    p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")
+    p.add_argument("--iterations", type=int, default=None, help="stop after this many PPO iterations in total")
+    p.add_argument("--minutes", type=float, default=None, help="wall-clock budget in minutes")
+    p.add_argument("--envs", type=int, default=None, help="worlds stepped together (default 256)")
+    p.add_argument("--no-anneal", action="store_true", help="fixed responsiveness (no curriculum)")
+    p.set_defaults(func=train_cmd)
+    p = sub.add_parser("export", help="export a checkpoint to TorchScript and ONNX")
+    p.add_argument("--checkpoint", required=True)
+    p.add_argument("--out", default="export")
+    p.set_defaults(func=export_cmd)
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -6,3 +6,7 @@ from crowdbench.policies.base import POLICIES, RobotPolicy, make_policy, registe
 from crowdbench.policies.classic import LinearPolicy, ORCAPolicy
 
 __all__ = ["POLICIES", "LinearPolicy", "ORCAPolicy", "RobotPolicy", "make_policy", "register"]
+
+from crowdbench.policies.h2int import H2INTPolicy  # noqa: E402  (registers "h2int")
+
+__all__ += ["H2INTPolicy"]

@@ -1,0 +1,282 @@
+"""The H²INT network (§Methodology) as rsl-rl 5 models, plus its export module.
+
+Tokens: the robot vector w̃ = [px, py, r, gx, gy, v_pref, θ, vx, vy] (9-d) → MLP → φ_r, and each observed pedestrian's
+relative position (Δx, Δy) → shared MLP → φ_e. Every token gets a type embedding (robot / edge) and a learned
+positional embedding whose *position is the token's rank in the distance-sorted sequence* (0 = robot, 1 = nearest
+pedestrian, ...). Two gated Transformer stages follow — pre-LayerNorm, GRU-style gates (Parisotto et al., GTrXL)
+after attention and after the FFN, attention masked so padded or unseen pedestrians never contribute — then the robot
+token z = X⁽²⁾₀ feeds a GRU whose state h_t is shared by the actor head (mean of a Gaussian with fixed diagonal
+covariance) and the value head.
+
+Variants (same code path): ``h2int`` (2 gated stages), ``flat`` (1 stage), ``meanpool`` (attention replaced by the
+mean of the valid tokens), ``standard`` (plain residual connections instead of gates).
+
+rsl-rl keeps actor and critic as two modules; to share the trunk as the paper does, :class:`H2INTCritic` holds a
+(non-registered) reference to the actor and reuses the actor's latent for the same observation object (PPO always
+calls the actor first), computing it through the shared trunk otherwise.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+import torch.nn as nn
+from rsl_rl.algorithms import PPO
+from rsl_rl.models import MLPModel
+from rsl_rl.modules import RNN, EmpiricalNormalization
+from tensordict import TensorDict
+
+VARIANTS = ("h2int", "flat", "meanpool", "standard")
+EDGE_SCALE = 5.0
+"""Relative positions are divided by this (the sensing range) before the edge MLP [m]."""
+
+
+class GRUGate(nn.Module):
+    """GTrXL gate: g(x, y) = (1 − z)⊙x + z⊙tanh(W_g y + U_g (r⊙x)), r, z = σ(...); bias makes it start near x."""
+
+    def __init__(self, d: int, bias: float = 2.0) -> None:
+        super().__init__()
+        self.w = nn.Linear(d, 3 * d, bias=False)
+        self.u = nn.Linear(d, 2 * d, bias=False)
+        self.ug = nn.Linear(d, d, bias=False)
+        self.bg = nn.Parameter(torch.full((d,), bias))
+
+    def forward(self, x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
+        wr, wz, wg = self.w(y).chunk(3, dim=-1)
+        ur, uz = self.u(x).chunk(2, dim=-1)
+        r = torch.sigmoid(wr + ur)
+        z = torch.sigmoid(wz + uz - self.bg)
+        h = torch.tanh(wg + self.ug(r * x))
+        return (1 - z) * x + z * h
+
+
+class Stage(nn.Module):
+    """One encoder stage: Y = Gate₁(X, MHA(LN(X))), X' = Gate₂(Y, FFN(LN(Y))) (plain residuals for ``standard``)."""
+
+    def __init__(self, d: int, heads: int, ffn: int, gated: bool, attention: bool) -> None:
+        super().__init__()
+        self.heads, self.gated, self.attention = heads, gated, attention
+        self.ln1, self.ln2 = nn.LayerNorm(d), nn.LayerNorm(d)
+        self.qkv = nn.Linear(d, 3 * d)
+        self.out = nn.Linear(d, d)
+        self.ffn = nn.Sequential(nn.Linear(d, ffn), nn.GELU(), nn.Linear(ffn, d))
+        if gated:
+            self.gate1, self.gate2 = GRUGate(d), GRUGate(d)
+
+    def mix(self, x: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
+        """Masked multi-head self-attention (or masked mean pooling) over tokens ``(B, S, d)``; ``valid`` ``(B, S)``."""
+        B, S, d = x.shape
+        q, k, v = self.qkv(x).chunk(3, dim=-1)
+        if not self.attention:  # meanpool: every token receives the mean of the valid tokens' values
+            w = valid.to(v.dtype).unsqueeze(-1)
+            pooled = (v * w).sum(1, keepdim=True) / w.sum(1, keepdim=True)
+            return self.out(pooled.expand(B, S, d))
+        h = self.heads
+        q = q.view(B, S, h, d // h).transpose(1, 2)
+        k = k.view(B, S, h, d // h).transpose(1, 2)
+        v = v.view(B, S, h, d // h).transpose(1, 2)
+        scores = q @ k.transpose(-1, -2) / math.sqrt(d // h)
+        scores = scores.masked_fill(~valid[:, None, None, :], float("-inf"))  # keys: padded / unseen never contribute
+        att = torch.softmax(scores, dim=-1) @ v
+        return self.out(att.transpose(1, 2).reshape(B, S, d))
+
+    def forward(self, x: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
+        a = self.mix(self.ln1(x), valid)
+        y = self.gate1(x, a) if self.gated else x + a
+        f = self.ffn(self.ln2(y))
+        return self.gate2(y, f) if self.gated else y + f
+
+
+class H2INTEncoder(nn.Module):
+    """Robot vector ``(B, 9)`` + edges ``(B, N, 2)`` + validity ``(B, N)`` bool → context z ``(B, d)``."""
+
+    def __init__(self, n_max: int, variant: str = "h2int", d_model: int = 32, heads: int = 4, ffn: int = 64):
+        super().__init__()
+        if variant not in VARIANTS:
+            raise ValueError(f"variant={variant!r}; valid choices: {', '.join(VARIANTS)}")
+        self.edge_scale = EDGE_SCALE
+        self.robot_norm = EmpiricalNormalization(9)
+        self.robot_mlp = nn.Sequential(nn.Linear(9, d_model), nn.ReLU(), nn.Linear(d_model, d_model))
+        self.edge_mlp = nn.Sequential(nn.Linear(2, d_model), nn.ReLU(), nn.Linear(d_model, d_model))
+        self.type_emb = nn.Embedding(2, d_model)
+        self.pos_emb = nn.Embedding(n_max + 1, d_model)
+        n_stages = 1 if variant == "flat" else 2
+        self.stages = nn.ModuleList(Stage(d_model, heads, ffn, gated=variant != "standard",
+                                          attention=variant != "meanpool") for _ in range(n_stages))
+        self.final_ln = nn.LayerNorm(d_model)
+        self.register_buffer("types", torch.cat([torch.zeros(1, dtype=torch.long),
+                                                 torch.ones(n_max, dtype=torch.long)]), persistent=False)
+        self.register_buffer("positions", torch.arange(n_max + 1), persistent=False)
+
+    def forward(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor, trim: bool = False):
+        """``trim=True`` drops the trailing token columns that are invalid for the whole batch (observations are
+        sorted by distance, so padding sits at the end): the output is unchanged, the cost drops with the crowd seen."""
+        n = edges.shape[1]
+        if trim:
+            cols = torch.arange(1, n + 1, device=valid.device)
+            n = int((valid.long() * cols).max()) if valid.numel() else 0  # last valid column + 1
+            edges, valid = edges[:, :n], valid[:, :n]
+        phi_r = self.robot_mlp(self.robot_norm(robot)).unsqueeze(1)
+        phi_e = self.edge_mlp(edges / self.edge_scale)
+        x = torch.cat([phi_r, phi_e], 1) + self.type_emb(self.types[: n + 1]) + self.pos_emb(self.positions[: n + 1])
+        tok_valid = torch.cat([valid.new_ones((valid.shape[0], 1)), valid], 1)  # the robot token is always valid
+        for stage in self.stages:
+            x = stage(x, tok_valid)
+        return self.final_ln(x[:, 0])
+
+
+class H2INTActor(MLPModel):
+    """rsl-rl actor: encoder → GRU → MLP head → Gaussian mean (fixed covariance via ``distribution_cfg``).
+
+    Observation groups: ``robot`` ``(·, 9)``, ``humans`` ``(·, N_max, 2)``, ``mask`` ``(·, N_max)`` (1 = valid).
+    """
+
+    is_recurrent = True
+
+    def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int, variant: str = "h2int",
+                 d_model: int = 32, heads: int = 4, ffn: int = 64, gru_hidden: int = 64,
+                 hidden_dims: tuple[int, ...] | list[int] = (64,), activation: str = "elu",
+                 distribution_cfg: dict | None = None, obs_normalization: bool = False) -> None:
+        self.latent_dim = gru_hidden
+        super().__init__(obs, obs_groups, obs_set, output_dim, hidden_dims, activation, False, distribution_cfg)
+        n_max = obs["humans"].shape[-2]
+        self.encoder = H2INTEncoder(n_max, variant, d_model, heads, ffn)
+        self.rnn = RNN(d_model, gru_hidden, 1, "gru")
+        self._cache: tuple | None = None
+
+    def _get_obs_dim(self, obs, obs_groups, obs_set):
+        return ["robot", "humans", "mask"], 9
+
+    def _get_latent_dim(self) -> int:
+        return self.latent_dim
+
+    def bucketed(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor, buckets: int = 4):
+        """Encode samples grouped by how many pedestrians they see, each group trimmed to its own maximum: exact
+        (samples are independent), and most samples see few pedestrians, so little attention is spent on padding."""
+        if robot.shape[0] < 64:
+            return self.encoder(robot, edges, valid, trim=True)
+        cols = torch.arange(1, valid.shape[1] + 1, device=valid.device)
+        order = torch.argsort((valid.long() * cols).amax(1))  # by last valid column
+        out = robot.new_empty((robot.shape[0], self.encoder.final_ln.normalized_shape[0]))
+        for idx in order.chunk(buckets):
+            out[idx] = self.encoder(robot[idx], edges[idx], valid[idx], trim=True)
+        return out
+
+    def encode(self, obs: TensorDict, masks: torch.Tensor | None = None) -> torch.Tensor:
+        """Context z for every step: ``(N, d)`` in rollouts, ``(T, B, d)`` for padded trajectories (only the valid
+        entries are encoded; padding stays zero)."""
+        robot, edges, valid = obs["robot"], obs["humans"], obs["mask"] > 0.5
+        if masks is None:
+            return self.bucketed(robot, edges, valid)
+        z = robot.new_zeros((*masks.shape, self.encoder.final_ln.normalized_shape[0]))
+        z[masks] = self.bucketed(robot[masks], edges[masks], valid[masks])
+        return z
+
+    def trunk(self, obs: TensorDict, masks: torch.Tensor | None = None, hidden_state=None) -> torch.Tensor:
+        return self.rnn(self.encode(obs, masks), masks, hidden_state).squeeze(0)
+
+    def get_latent(self, obs, masks=None, hidden_state=None):
+        latent = self.trunk(obs, masks, hidden_state)
+        self._cache = (obs, latent)
+        return latent
+
+    def reset(self, dones=None, hidden_state=None) -> None:
+        self.rnn.reset(dones, hidden_state)
+
+    def get_hidden_state(self):
+        return self.rnn.hidden_state
+
+    def detach_hidden_state(self, dones=None) -> None:
+        self.rnn.detach_hidden_state(dones)
+
+    def update_normalization(self, obs: TensorDict) -> None:
+        if self.training:
+            self.encoder.robot_norm.update(obs["robot"])
+
+    def as_jit(self) -> nn.Module:
+        return H2INTExport(self)
+
+    def as_onnx(self, verbose: bool = False) -> nn.Module:
+        return H2INTExport(self)
+
+
+class H2INTCritic(MLPModel):
+    """Value head on the actor's shared trunk (see the module docstring)."""
+
+    is_recurrent = True
+
+    def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int, actor: H2INTActor,
+                 hidden_dims: tuple[int, ...] | list[int] = (64,), activation: str = "elu", **_: object) -> None:
+        self.latent_dim = actor.latent_dim
+        super().__init__(obs, obs_groups, obs_set, output_dim, hidden_dims, activation, False, None)
+        object.__setattr__(self, "_actor", actor)  # a reference, not a submodule: parameters are not duplicated
+
+    def _get_obs_dim(self, obs, obs_groups, obs_set):
+        return ["robot", "humans", "mask"], 9
+
+    def _get_latent_dim(self) -> int:
+        return self.latent_dim
+
+    def get_latent(self, obs, masks=None, hidden_state=None):
+        cache = self._actor._cache
+        if cache is not None and cache[0] is obs:
+            return cache[1]
+        return self._actor.trunk(obs, masks, hidden_state)
+
+    def reset(self, dones=None, hidden_state=None) -> None:
+        if dones is None and hidden_state is not None:  # compute_returns restores the shared state
+            self._actor.rnn.reset(None, hidden_state)
+
+    def get_hidden_state(self):
+        return self._actor.rnn.hidden_state
+
+    def update_normalization(self, obs: TensorDict) -> None:
+        pass
+
+
+class SharedTrunkPPO(PPO):
+    """rsl-rl PPO whose critic is an :class:`H2INTCritic` on the actor's trunk."""
+
+    @staticmethod
+    def construct_algorithm(obs, env, cfg, device):
+        from rsl_rl.storage import RolloutStorage
+        from rsl_rl.utils import resolve_class, resolve_obs_groups
+
+        alg_class, alg_cfg = resolve_class(cfg["algorithm"])
+        _, actor_cfg = resolve_class(cfg["actor"])
+        _, critic_cfg = resolve_class(cfg["critic"])
+        cfg["obs_groups"] = resolve_obs_groups(obs, cfg["obs_groups"], ["actor", "critic"])
+        alg_cfg.pop("share_cnn_encoders", None)
+        actor = H2INTActor(obs, cfg["obs_groups"], "actor", env.num_actions, **actor_cfg).to(device)
+        critic = H2INTCritic(obs, cfg["obs_groups"], "critic", 1, actor=actor, **critic_cfg).to(device)
+        storage = RolloutStorage("rl", env.num_envs, cfg["num_steps_per_env"], obs, [env.num_actions], device)
+        return alg_class(actor, critic, storage, device=device, **alg_cfg, multi_gpu_cfg=cfg["multi_gpu"])
+
+
+class H2INTExport(nn.Module):
+    """Deterministic recurrent policy for TorchScript/ONNX: ``(robot (B, 9), humans (B, N, 2), mask (B, N),
+    h_in (1, B, H)) → (action (B, 2), h_out (1, B, H))``."""
+
+    def __init__(self, actor: H2INTActor) -> None:
+        super().__init__()
+        import copy
+
+        self.encoder = copy.deepcopy(actor.encoder)
+        self.gru = copy.deepcopy(actor.rnn.rnn)
+        self.mlp = copy.deepcopy(actor.mlp)
+        self.hidden_size = self.gru.hidden_size
+        self.n_max = int(actor.encoder.pos_emb.num_embeddings - 1)
+
+    def forward(self, robot: torch.Tensor, humans: torch.Tensor, mask: torch.Tensor, h_in: torch.Tensor):
+        z = self.encoder(robot, humans, mask > 0.5)
+        out, h_out = self.gru(z.unsqueeze(0), h_in)
+        return self.mlp(out.squeeze(0)), h_out
+
+    def get_dummy_inputs(self, batch: int = 2) -> tuple[torch.Tensor, ...]:
+        """Example inputs (batch 2: torch.export would specialise a batch of 1 into a constant)."""
+        return (torch.zeros(batch, 9), torch.zeros(batch, self.n_max, 2), torch.ones(batch, self.n_max),
+                torch.zeros(1, batch, self.hidden_size))
+
+    input_names = ["robot", "humans", "mask", "h_in"]
+    output_names = ["action", "h_out"]

@@ -1,0 +1,105 @@
+"""Training smoke test: tiny train → checkpoint → exact resume → evaluate; exports match PyTorch; curriculum."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from crowdbench.cli import main
+from crowdbench.policies.deploy import export_module, export_onnx, export_torchscript, planar_to_unicycle
+from crowdbench.policies.h2int import H2INTPolicy, load_checkpoint
+from crowdbench.training.train import TrainConfig, train
+from crowdbench.training.vecenv import Curriculum
+
+
+def tiny(**kw) -> TrainConfig:
+    base = dict(num_envs=8, steps_per_env=8, mini_batches=2, epochs=1, d_model=16, heads=2, ffn=16, gru_hidden=16,
+                head_dims=(16,), humans_range=(2, 5), checkpoint_every=2, eval_every=2, eval_episodes=4, window=8)
+    base.update(kw)
+    return TrainConfig(**base)
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    root = tmp_path_factory.mktemp("runs")
+    straight = train(tiny(iterations=4), str(root / "straight"), quiet=True)
+    train(tiny(iterations=2), str(root / "split"), quiet=True)
+    resumed = train(tiny(iterations=4), str(root / "split"), resume=str(root / "split"), quiet=True)
+    return root, straight, resumed
+
+
+def test_resume_continues_exactly(runs):
+    _, straight, resumed = runs
+    assert resumed.iteration == straight.iteration == 4
+    a, b = straight.alg.actor.state_dict(), resumed.alg.actor.state_dict()
+    for k in a:
+        torch.testing.assert_close(a[k], b[k], rtol=0, atol=0)
+    assert straight.history["mean_reward"] == resumed.history["mean_reward"]
+    assert straight.env.curriculum.state_dict() == resumed.env.curriculum.state_dict()
+
+
+def test_checkpoint_loads_weights_only_and_has_artifacts(runs):
+    root, _, _ = runs
+    ckpt = load_checkpoint(root / "straight" / "last.pt")  # weights_only=True inside
+    assert ckpt["iteration"] == 4 and ckpt["variant"] == "h2int" and ckpt["seed"] == 0
+    assert (root / "straight" / "curve.png").stat().st_size > 1000
+    assert (root / "straight" / "history.json").exists()
+    assert any((root / "straight" / "tb").iterdir())
+
+
+def test_evaluate_checkpoint_from_cli(runs, tmp_path, capsys):
+    root, _, _ = runs
+    out = tmp_path / "e.json"
+    code = main(["evaluate", "--policy", "h2int", "--checkpoint", str(root / "straight" / "last.pt"), "--episodes",
+                 "4", "--humans", "5", "--responsiveness", "0.5", "--json", str(out)])
+    assert code == 0 and out.exists()
+    assert "success_rate" in capsys.readouterr().out
+
+
+def test_exports_match_pytorch(runs, tmp_path):
+    root, _, _ = runs
+    path = str(root / "straight" / "last.pt")
+    policy = H2INTPolicy(checkpoint=path)
+    module = export_module(path)
+    scripted = torch.jit.load(export_torchscript(path, str(tmp_path / "policy.pt")))
+    rng = np.random.default_rng(0)
+    B, n = 3, 30
+    h_ts = torch.zeros(1, B, module.hidden_size)
+    onnx_path = export_onnx(path, str(tmp_path / "policy.onnx"))
+    try:
+        import onnxruntime as ort
+
+        sess = ort.InferenceSession(onnx_path)
+    except ImportError:  # optional dependency
+        sess = None
+    h_ox = np.zeros((1, B, module.hidden_size), np.float32)
+    for _ in range(50):
+        robot = rng.normal(size=(B, 9)).astype(np.float32)
+        humans = rng.normal(scale=3, size=(B, n, 2)).astype(np.float32)
+        mask = (rng.random((B, n)) < 0.3).astype(np.float32)
+        ref = policy.act({"robot": robot, "humans": humans, "mask": mask})
+        with torch.no_grad():
+            a_ts, h_ts = scripted(torch.from_numpy(robot), torch.from_numpy(humans), torch.from_numpy(mask), h_ts)
+        np.testing.assert_allclose(a_ts.numpy(), ref, atol=1e-5)
+        if sess is not None:
+            a_ox, h_ox = sess.run(None, {"robot": robot, "humans": humans, "mask": mask, "h_in": h_ox})
+            np.testing.assert_allclose(a_ox, ref, atol=1e-5)
+
+
+def test_planar_to_unicycle_bounds():
+    v, w = planar_to_unicycle(np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, 0.0]]), np.zeros(4),
+                              v_max=0.8, w_max=1.0)
+    np.testing.assert_allclose(v, [0.8, 0.0, 0.0, 0.0], atol=1e-12)
+    np.testing.assert_allclose(np.abs(w), [0.0, 1.0, 1.0, 0.0], atol=1e-12)  # behind: turn on the spot, max rate
+
+
+def test_curriculum_lowers_rho_only_after_window_and_cooldown():
+    c = Curriculum(window=10, cooldown=10, eta=0.9)
+    assert not c.record(np.ones(9, bool), 9)  # window not full
+    assert c.record(np.ones(1, bool), 10) and c.rho == pytest.approx(0.7)
+    assert not c.record(np.ones(9, bool), 19)  # cooldown: window refilled at the new ρ first
+    assert c.record(np.ones(1, bool), 20) and c.rho == pytest.approx(0.6)
+    assert not c.record(np.zeros(10, bool), 30)  # success below η: no change
+    fixed = Curriculum(enabled=False, window=2, cooldown=2)
+    assert not fixed.record(np.ones(5, bool), 5) and fixed.rho == 0.8
