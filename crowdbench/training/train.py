@@ -97,8 +97,8 @@ class TrainConfig:
             "algorithm": {"class_name": SharedTrunkPPO, "num_learning_epochs": self.epochs,
                           "num_mini_batches": self.mini_batches, "learning_rate": self.learning_rate,
                           "entropy_coef": 0.0, "schedule": "adaptive", "desired_kl": self.desired_kl,
-                          "gamma": self.gamma, "lam": self.lam, "max_grad_norm": 1.0, "value_loss_coef": self.value_loss_coef,
-                          "clip_param": 0.2},
+                          "gamma": self.gamma, "lam": self.lam, "max_grad_norm": 1.0,
+                          "value_loss_coef": self.value_loss_coef, "clip_param": 0.2},
             "actor": {"class_name": H2INTActor, **self.model_cfg()},
             "critic": {"class_name": H2INTCritic, "hidden_dims": list(self.head_dims)},
         }
@@ -151,7 +151,8 @@ class Trainer:
     def load(self, path: str) -> None:
         ckpt = load_checkpoint(path)
         if ckpt["train_config"]["variant"] != self.cfg.variant:
-            raise ValueError(f"--resume: checkpoint variant {ckpt['train_config']['variant']!r} != {self.cfg.variant!r}")
+            raise ValueError(f"--resume: checkpoint variant {ckpt['train_config']['variant']!r} "
+                             f"!= {self.cfg.variant!r}")
         self.alg.actor.load_state_dict(ckpt["actor"])
         self.alg.critic.load_state_dict(ckpt["critic"])
         self.alg.optimizer.load_state_dict(ckpt["optimizer"])
