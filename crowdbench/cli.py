@@ -124,6 +124,14 @@ def export_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def bench_cmd(args: argparse.Namespace) -> int:
+    """Measure and print the throughput figures; write benchmarks/RESULTS.md and the throughput PNG."""
+    from crowdbench.bench import main as bench_main
+
+    bench_main(quick=args.quick, json_path=args.json, out_dir=args.out)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="crowdbench", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -153,6 +161,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--checkpoint", required=True)
     p.add_argument("--out", default="export")
     p.set_defaults(func=export_cmd)
+    p = sub.add_parser("bench", help="measure throughput (simulator, ORCA, training, inference)")
+    p.add_argument("--quick", action="store_true", help="fewer steps and repeats")
+    p.add_argument("--json", default=None, help="also write the figures to this JSON file")
+    p.add_argument("--out", default="benchmarks", help="folder for RESULTS.md and throughput.png")
+    p.set_defaults(func=bench_cmd)
     args = parser.parse_args(argv)
     try:
         return args.func(args)

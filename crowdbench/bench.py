@@ -1,0 +1,247 @@
+"""``crowdbench bench``: throughput figures of the simulator, the ORCA kernel, training and H²INT inference.
+
+Figures (medians of repeated runs, with the spread = max − min):
+
+* ``env_steps_per_s[N][batch]`` — circle crossing with latent-responsive ORCA pedestrians, world + pedestrian model
+  + robot observation, constant robot action, one core;
+* ``orca_agent_steps_per_s[N]`` — the ORCA kernel alone, 64 worlds of N agents, one core;
+* ``train_steps_per_s`` — H²INT PPO training end to end (rollout + update), default configuration;
+* ``h2int_inference_ms`` — one decision for one robot (encoder + GRU + head), CPU, one thread.
+
+Writes ``benchmarks/RESULTS.md`` and ``benchmarks/throughput.png`` (steps/s against N and against batch size).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import platform
+import statistics
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+TARGETS = {"env_steps_per_s N=20 batch=64": 10_000, "orca_agent_steps_per_s N=20": 400_000,
+           "train_steps_per_s": 5_000, "h2int_inference_ms": 1.0}
+
+
+def machine() -> dict[str, Any]:
+    """CPU model, cores and library versions."""
+    cpu = platform.processor() or platform.machine()
+    with contextlib.suppress(OSError, StopIteration), open("/proc/cpuinfo") as f:
+        cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    import numba
+    import pymunk
+    import torch
+
+    import crowdbench
+
+    return {"cpu": cpu, "logical_cores": os.cpu_count(), "python": platform.python_version(),
+            "numpy": np.__version__, "numba": numba.__version__, "pymunk": pymunk.version, "torch": torch.__version__,
+            "crowdbench": crowdbench.__version__}
+
+
+def _stats(samples: list[float]) -> dict[str, float]:
+    return {"median": float(statistics.median(samples)), "spread": float(max(samples) - min(samples)),
+            "runs": len(samples)}
+
+
+def _one_core() -> contextlib.AbstractContextManager:
+    @contextlib.contextmanager
+    def pin():
+        try:
+            before = os.sched_getaffinity(0)
+            os.sched_setaffinity(0, {min(before)})
+        except (AttributeError, OSError):
+            before = None
+        try:
+            yield
+        finally:
+            if before is not None:
+                os.sched_setaffinity(0, before)
+
+    return pin()
+
+
+def _repeat(fn: Callable[[], float], repeats: int) -> dict[str, float]:
+    return _stats([fn() for _ in range(repeats)])
+
+
+def env_steps_per_s(n: int, batch: int, steps: int, repeats: int) -> dict[str, float]:
+    from crowdbench.config import WorldConfig
+    from crowdbench.robots import make_observation
+    from crowdbench.worlds import CrowdWorld
+
+    w = CrowdWorld(WorldConfig(num_humans=n, time_limit=1e9), batch, "circle_crossing", "responsive_orca")
+    obs = make_observation("relative", w.config)
+    action = np.tile([0.0, 0.5], (batch, 1))
+    w.step(action)
+
+    def run() -> float:
+        t = time.perf_counter()
+        for _ in range(steps):
+            w.step(action)
+            obs.build(w)
+        return steps * batch / (time.perf_counter() - t)
+
+    return _repeat(run, repeats)
+
+
+def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> dict[str, float]:
+    from crowdbench.humans import preferred_velocity
+    from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
+
+    rng = np.random.default_rng(0)
+    radius = max(4.0, n * 0.8 / (2 * np.pi) * 1.3)
+    ang = rng.uniform(0, 2 * np.pi, (worlds, n))
+    pos = radius * np.stack([np.cos(ang), np.sin(ang)], -1) + rng.uniform(-0.3, 0.3, (worlds, n, 2))
+    goal, vel, f = -pos, np.zeros_like(pos), np.ones((worlds, n))
+    args = (0.31 * f, f, 10.0 * f, np.full((worlds, n), 10, np.int64), 5.0 * f, 5.0 * f, np.ones((worlds, n), bool),
+            np.ones((worlds, n), bool), np.full((worlds, n), -1, np.int64))
+    obst, out = build_obstacles([]), np.empty_like(pos)
+    orca_batch(pos, vel, preferred_velocity(pos, goal, f, 0.25), *args, *obst, 0.25, out)
+    samples = []
+    for _ in range(repeats):
+        elapsed = 0.0
+        for _ in range(steps):
+            pref = preferred_velocity(pos, goal, f, 0.25)
+            t = time.perf_counter()
+            orca_batch(pos, vel, pref, *args, *obst, 0.25, out)
+            elapsed += time.perf_counter() - t
+            vel = out.copy()
+            pos = pos + vel * 0.25
+        samples.append(steps * worlds * n / elapsed)
+    return _stats(samples)
+
+
+def train_steps_per_s(iterations: int, repeats: int) -> dict[str, float]:
+    import tempfile
+
+    from crowdbench.training.train import TrainConfig, Trainer
+
+    samples = []
+    for r in range(repeats):
+        with tempfile.TemporaryDirectory() as tmp:
+            tr = Trainer(TrainConfig(iterations=iterations + 2, eval_every=0, checkpoint_every=10**6, seed=r), tmp,
+                         quiet=True)
+            tr.cfg.iterations = 2  # warm-up (numba compilation, allocator)
+            tr.train()
+            steps0, t = tr.env_steps, time.perf_counter()
+            tr.cfg.iterations = iterations + 2
+            tr.train()
+            samples.append((tr.env_steps - steps0) / (time.perf_counter() - t))
+    return _stats(samples)
+
+
+def h2int_inference_ms(repeats: int, checkpoint: str | None = None) -> dict[str, float]:
+    import torch
+
+    from crowdbench.config import WorldConfig
+    from crowdbench.policies.h2int import DEFAULT_CHECKPOINT, H2INTPolicy, build_actor
+    from crowdbench.training.train import TrainConfig
+
+    torch.set_num_threads(1)
+    path = checkpoint or DEFAULT_CHECKPOINT
+    if os.path.exists(path):
+        policy = H2INTPolicy(WorldConfig(), checkpoint=path)
+    else:  # untrained network of the default architecture: same cost
+        policy = H2INTPolicy(WorldConfig(), actor=build_actor(TrainConfig().model_cfg(), 30))
+    rng = np.random.default_rng(0)
+    k = 12  # pedestrians in view
+    obs = {"robot": rng.normal(size=(1, 9)).astype(np.float32),
+           "humans": np.zeros((1, 30, 2), np.float32), "mask": np.zeros((1, 30), np.float32)}
+    obs["humans"][0, :k] = rng.normal(scale=2, size=(k, 2))
+    obs["mask"][0, :k] = 1
+    for _ in range(20):
+        policy.act(obs)
+
+    def run() -> float:
+        t = time.perf_counter()
+        for _ in range(200):
+            policy.act(obs)
+        return (time.perf_counter() - t) / 200 * 1e3
+
+    return _repeat(run, repeats)
+
+
+def run(quick: bool = False) -> dict[str, Any]:
+    """All figures; ``quick`` uses fewer steps and repeats (for smoke tests and CI)."""
+    rep = 3 if quick else 7
+    res: dict[str, Any] = {"machine": machine(), "quick": quick, "env_steps_per_s": {}, "orca_agent_steps_per_s": {}}
+    with _one_core():
+        for n in (10, 20, 30, 50):
+            res["env_steps_per_s"][str(n)] = {
+                "1": env_steps_per_s(n, 1, 50 if quick else 400, rep),
+                "64": env_steps_per_s(n, 64, 5 if quick else 40, rep)}
+        for n in (20, 50, 200):
+            res["orca_agent_steps_per_s"][str(n)] = orca_agent_steps_per_s(n, 64, (3 if quick else 20)
+                                                                           if n == 200 else (10 if quick else 60), rep)
+        res["h2int_inference_ms"] = h2int_inference_ms(rep)
+    res["train_steps_per_s"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3)
+    return res
+
+
+def results_markdown(res: dict[str, Any]) -> str:
+    m = res["machine"]
+    lines = ["# Benchmark results", "", f"`crowdbench bench{' --quick' if res['quick'] else ''}` on {m['cpu']}, "
+             f"{m['logical_cores']} logical cores; Python {m['python']}, numpy {m['numpy']}, numba {m['numba']}, "
+             f"pymunk {m['pymunk']}, torch {m['torch']}. Medians (spread = max − min); one core unless stated.", "",
+             "| figure | N | batch | median | spread |", "|---|---|---|---|---|"]
+    for n, by_b in res["env_steps_per_s"].items():
+        for b, s in by_b.items():
+            lines.append(f"| env_steps_per_s | {n} | {b} | {s['median']:,.0f} | {s['spread']:,.0f} |")
+    for n, s in res["orca_agent_steps_per_s"].items():
+        lines.append(f"| orca_agent_steps_per_s | {n} | 64 | {s['median']:,.0f} | {s['spread']:,.0f} |")
+    s = res["train_steps_per_s"]
+    lines.append(f"| train_steps_per_s (2 cores, 1 torch thread) | 10–30 | 256 | {s['median']:,.0f} | "
+                 f"{s['spread']:,.0f} |")
+    s = res["h2int_inference_ms"]
+    lines.append(f"| h2int_inference_ms | 12 seen | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
+    lines += ["", "Targets: " + "; ".join(f"{k} {'≤' if 'ms' in k else '≥'} {v:,}" for k, v in TARGETS.items()), ""]
+    return "\n".join(lines)
+
+
+def plot(res: dict[str, Any], path: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from crowdbench.io import atomic_path
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 4), dpi=100)
+    ns = [int(n) for n in res["env_steps_per_s"]]
+    for b, style in (("64", "o-"), ("1", "s--")):
+        axes[0].plot(ns, [res["env_steps_per_s"][str(n)][b]["median"] for n in ns], style, label=f"batch {b}")
+    axes[0].set(xlabel="pedestrians N", ylabel="env steps / s (one core)", yscale="log",
+                title="circle crossing, latent-responsive ORCA")
+    axes[0].legend()
+    batches = [1, 8, 16, 32, 64, 128, 256] if not res.get("quick") else [1, 16, 64]
+    rates = [env_steps_per_s(20, b, max(5, 2000 // b) if not res.get("quick") else 5, 3)["median"] for b in batches]
+    axes[1].plot(batches, rates, "o-")
+    axes[1].set(xlabel="worlds stepped together", ylabel="env steps / s (one core)", xscale="log", yscale="log",
+                title="N = 20")
+    for ax in axes:
+        ax.grid(alpha=0.3, which="both")
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
+
+
+def main(quick: bool = False, json_path: str | None = None, out_dir: str = "benchmarks") -> dict[str, Any]:
+    from crowdbench.io import write_text
+
+    res = run(quick)
+    md = results_markdown(res)
+    print(md)
+    os.makedirs(out_dir, exist_ok=True)
+    write_text(os.path.join(out_dir, "RESULTS.md"), md)
+    with _one_core():
+        plot(res, os.path.join(out_dir, "throughput.png"))
+    if json_path:
+        write_text(json_path, json.dumps(res, indent=2) + "\n")
+    return res
