@@ -132,6 +132,23 @@ def bench_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def tables_cmd(args: argparse.Namespace) -> int:
+    """Regenerate the paper's Table I/II/III cells for one policy."""
+    import torch
+
+    from crowdbench import leaderboard
+
+    torch.set_num_threads(1)
+    grid = leaderboard.cells(tuple(t.strip() for t in args.tables.split(",")))
+    kwargs = {"checkpoint": args.checkpoint} if args.checkpoint else {}
+    results = leaderboard.evaluate_cells(args.policy, grid, args.episodes, args.seed, policy_kwargs=kwargs)
+    meta = {"command": "crowdbench " + " ".join(sys.argv[1:]), "policy": args.policy, "checkpoint": args.checkpoint,
+            "episodes": args.episodes, "seed": args.seed}
+    leaderboard.save(results, args.json, args.md, meta)
+    print(leaderboard.markdown(results))
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="crowdbench", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -161,6 +178,15 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--checkpoint", required=True)
     p.add_argument("--out", default="export")
     p.set_defaults(func=export_cmd)
+    p = sub.add_parser("tables", help="the paper's Table I/II/III cells for one policy")
+    p.add_argument("--policy", default="h2int", help=f"one of {POLICIES.names()}")
+    p.add_argument("--checkpoint", default=None)
+    p.add_argument("--tables", default="I,II,III", help="comma-separated subset of I, II, III")
+    p.add_argument("--episodes", type=int, default=500)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--json", default=None)
+    p.add_argument("--md", default=None)
+    p.set_defaults(func=tables_cmd)
     p = sub.add_parser("bench", help="measure throughput (simulator, ORCA, training, inference)")
     p.add_argument("--quick", action="store_true", help="fewer steps and repeats")
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")
