@@ -46,3 +46,15 @@ def robot_info(world: CrowdWorld, res: StepResult | None) -> dict[str, Any]:
 
 def config_fields() -> list[str]:
     return [f.name for f in dataclasses.fields(WorldConfig)]
+
+
+def render_frame(env) -> Any:
+    """``render()`` of both adapters: an RGB frame of world 0 with ``render_mode="rgb_array"``, else None."""
+    if env.render_mode is None:
+        return None
+    from crowdbench.render import Renderer
+
+    if env._renderer is None:
+        env._renderer = Renderer(env.world)
+        env._renderer.record(env.world)
+    return env._renderer.frame(env.world)

@@ -17,7 +17,7 @@ from typing import Any
 import gymnasium
 import numpy as np
 
-from crowdbench.envs.common import build_world, robot_action_space, robot_info
+from crowdbench.envs.common import build_world, render_frame, robot_action_space, robot_info
 from crowdbench.robots.observations import make_observation
 
 LAYOUT_IDS = {
@@ -66,14 +66,7 @@ class CrowdNavEnv(gymnasium.Env):
                 robot_info(self.world, res))
 
     def render(self):
-        if self.render_mode is None:
-            return None
-        from crowdbench.render import Renderer
-
-        if self._renderer is None:
-            self._renderer = Renderer(self.world)
-            self._renderer.record(self.world)
-        return self._renderer.frame(self.world)
+        return render_frame(self)
 
 
 def register_envs() -> None:

@@ -32,7 +32,7 @@ import numpy as np
 from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
-from crowdbench.envs.common import build_world, robot_action_space, robot_info
+from crowdbench.envs.common import build_world, render_frame, robot_action_space, robot_info
 from crowdbench.robots.observations import human_observation_space, human_observations, make_observation
 
 
@@ -153,14 +153,7 @@ class CrowdParallelEnv(ParallelEnv):
         return np.concatenate([w.pos[0], w.vel[0], w.goal[0], w.radius[0, :, None]], 1).astype(np.float32).ravel()
 
     def render(self):
-        if self.render_mode is None:
-            return None
-        from crowdbench.render import Renderer
-
-        if self._renderer is None:
-            self._renderer = Renderer(self.world)
-            self._renderer.record(self.world)
-        return self._renderer.frame(self.world)
+        return render_frame(self)
 
     def close(self) -> None:
         self._renderer = None

@@ -151,6 +151,16 @@ def _lp3(lp, ld, n, n_obst, begin, radius, res, pp, pd):
             distance = _det(ld[i, 0], ld[i, 1], lp[i, 0] - res[0], lp[i, 1] - res[1])
 
 
+@nb.njit(cache=True, inline="always")
+def _cutoff_circle_line(vx, vy, cx, cy, rad, lp, ld, n):
+    """Line ``n``: the velocity projected on the cut-off circle of centre (cx, cy) and radius ``rad``."""
+    wx, wy = vx - cx, vy - cy
+    inv = 1.0 / np.sqrt(wx * wx + wy * wy)
+    wx, wy = wx * inv, wy * inv
+    ld[n, 0], ld[n, 1] = wy, -wx
+    lp[n, 0], lp[n, 1] = cx + rad * wx, cy + rad * wy
+
+
 @nb.njit(cache=True)
 def _obstacle_lines(px, py, vx, vy, r, th_obst, max_speed, opoint, onext, oprev, odir, oconvex, lp, ld, ob_idx, ob_d):
     """Obstacle neighbours + obstacle ORCA lines of one agent; returns the number of lines written."""
@@ -266,19 +276,11 @@ def _obstacle_lines(px, py, vx, vy, r, th_obst, max_speed, opoint, onext, oprev,
         t_right = (vx - rcx) * rlx + (vy - rcy) * rly
 
         if (t < 0.0 and t_left < 0.0) or (same and t_left < 0.0 and t_right < 0.0):
-            wx, wy = vx - lcx, vy - lcy
-            inv = 1.0 / np.sqrt(wx * wx + wy * wy)
-            wx, wy = wx * inv, wy * inv
-            ld[n, 0], ld[n, 1] = wy, -wx
-            lp[n, 0], lp[n, 1] = lcx + r * inv_th * wx, lcy + r * inv_th * wy
+            _cutoff_circle_line(vx, vy, lcx, lcy, r * inv_th, lp, ld, n)  # project on left cut-off circle
             n += 1
             continue
         elif t > 1.0 and t_right < 0.0:
-            wx, wy = vx - rcx, vy - rcy
-            inv = 1.0 / np.sqrt(wx * wx + wy * wy)
-            wx, wy = wx * inv, wy * inv
-            ld[n, 0], ld[n, 1] = wy, -wx
-            lp[n, 0], lp[n, 1] = rcx + r * inv_th * wx, rcy + r * inv_th * wy
+            _cutoff_circle_line(vx, vy, rcx, rcy, r * inv_th, lp, ld, n)  # project on right cut-off circle
             n += 1
             continue
 

@@ -1,0 +1,31 @@
+"""Smoke tests of the bench and tables commands' building blocks (figures are measured by `crowdbench bench`)."""
+
+from __future__ import annotations
+
+from crowdbench import bench, leaderboard
+
+
+def test_bench_figures_are_positive_and_formatted():
+    env = bench.env_steps_per_s(10, 4, steps=3, repeats=2)
+    orca = bench.orca_agent_steps_per_s(20, 4, steps=2, repeats=2)
+    inf = bench.h2int_inference_ms(repeats=2)
+    assert env["median"] > 0 and orca["median"] > 0 and inf["median"] > 0 and env["runs"] == 2
+    res = {"machine": bench.machine(), "quick": True, "env_steps_per_s": {"10": {"1": env, "64": env}},
+           "orca_agent_steps_per_s": {"20": orca}, "train_steps_per_s": env, "h2int_inference_ms": inf}
+    md = bench.results_markdown(res)
+    assert "env_steps_per_s" in md and "h2int_inference_ms" in md and res["machine"]["logical_cores"] >= 1
+
+
+def test_paper_grid():
+    grid = leaderboard.cells()
+    assert len(grid) == 3 + 3 + 9
+    assert {c.rho for c in grid if c.table == "I"} == {0.7, 0.5, 0.3}
+    assert {(c.humans, c.rho) for c in grid if c.table == "II"} == {(10, 0.0), (20, 0.0), (30, 0.0)}
+    assert all(c.humans == 30 for c in grid if c.table == "III")
+
+
+def test_tables_for_a_baseline(tmp_path):
+    res = leaderboard.evaluate_cells("orca", leaderboard.cells(("II",))[:1], episodes=4, progress=False)
+    assert res[0]["episodes"] == 4 and res[0]["humans"] == 10
+    leaderboard.save(res, str(tmp_path / "r.json"), str(tmp_path / "r.md"), {"episodes": 4})
+    assert "| II | N=10 | orca |" in (tmp_path / "r.md").read_text()
