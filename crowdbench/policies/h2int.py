@@ -18,7 +18,9 @@ from crowdbench.policies.base import RobotPolicy, register
 from crowdbench.policies.h2int_net import H2INTActor
 
 FORMAT = "crowdbench.h2int/1"
-DEFAULT_CHECKPOINT = os.path.join(os.path.dirname(__file__), "..", "..", "leaderboards", "checkpoints", "h2int.pt")
+DEFAULT_CHECKPOINT = os.path.normpath(os.path.join(os.path.dirname(__file__), "..", "..", "leaderboards", "checkpoints",
+                                                  "h2int.pt"))
+"""The shipped checkpoint (present in a source checkout / editable install)."""
 
 
 def build_actor(model_cfg: dict[str, Any], n_max: int) -> H2INTActor:
@@ -32,6 +34,9 @@ def build_actor(model_cfg: dict[str, Any], n_max: int) -> H2INTActor:
 
 def load_checkpoint(path: str | os.PathLike) -> dict[str, Any]:
     """Load and validate a crowdbench H²INT checkpoint (``weights_only=True``: safe for files from others)."""
+    if not os.path.exists(path):
+        raise ValueError(f"checkpoint {os.fspath(path)!r} not found; train one with `crowdbench train h2int` or pass "
+                         "--checkpoint PATH (the shipped one lives in leaderboards/checkpoints/ of a source checkout)")
     ckpt = torch.load(os.fspath(path), map_location="cpu", weights_only=True)
     if not isinstance(ckpt, dict) or ckpt.get("format") != FORMAT:
         raise ValueError(f"checkpoint {os.fspath(path)!r} is not a {FORMAT} file (format={ckpt.get('format')!r})")

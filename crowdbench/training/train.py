@@ -294,7 +294,7 @@ def plot_curve(history: dict[str, list], evals: list[dict], path: str, title: st
     ax2.set_ylim(0, 1.02)
     lines = ax.get_legend_handles_labels()
     lines2 = ax2.get_legend_handles_labels()
-    ax.legend(lines[0] + lines2[0], lines[1] + lines2[1], loc="lower right", fontsize=8)
+    ax.legend(lines[0] + lines2[0], lines[1] + lines2[1], loc="upper left", fontsize=8)
     ax.set_title(title)
     fig.tight_layout()
     with atomic_path(path, suffix=".png") as tmp:
