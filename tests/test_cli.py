@@ -47,3 +47,10 @@ def test_summarize_by_hand():
     s = summarize(eps)
     assert (s["success_rate"], s["collision_rate"], s["timeout_rate"]) == (0.5, 0.25, 0.25)
     assert s["nav_time"] == 12.0 and s["path_length"] == 12.5 and abs(s["delta_v"] - 0.675) < 1e-12
+
+
+def test_social_force_robot_beats_walking_blind():
+    """Sanity of the SF baseline: among non-reactive pedestrians it collides less than driving straight."""
+    sf = summarize(run_episodes(make_policy("social_force"), 40, seed=0, num_humans=10, human_model="linear"))
+    lin = summarize(run_episodes(make_policy("linear"), 40, seed=0, num_humans=10, human_model="linear"))
+    assert sf["collision_rate"] < lin["collision_rate"]

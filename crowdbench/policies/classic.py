@@ -64,3 +64,30 @@ class ORCAPolicy(RobotPolicy):
                    np.full((B, A), p.time_horizon_obst), active, controlled, np.full((B, A), -1, np.int64),
                    *self._obst, cfg.time_step, out)
         return out[:, 0]
+
+
+@register("social_force")
+class SocialForcePolicy(RobotPolicy):
+    """CrowdNav++'s Social Force robot: v ← v + dt·[KI·(v_des − v) + Σⱼ A·exp((r + rⱼ − dⱼ)/B)·n̂ⱼ], clipped to
+    v_pref, over the observed pedestrians (full state). Same constants as the pedestrian model (A = 2, B = 1, KI = 1).
+    """
+
+    observation = "full_state"
+
+    def __init__(self, config=None, A: float = 2.0, B: float = 1.0, KI: float = 1.0) -> None:
+        super().__init__(config)
+        self.A, self.B, self.KI = A, B, KI
+
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        robot = obs["robot"].astype(np.float64)
+        humans = obs["humans"].astype(np.float64)
+        valid = obs["mask"] > 0.5
+        v = robot[:, 7:9]
+        acc = self.KI * (_goal_velocity(robot, self.config.time_step) - v)
+        away = -humans[..., 0:2]  # from each pedestrian to the robot
+        dist = np.maximum(np.linalg.norm(away, axis=-1), 1e-9)
+        mag = np.where(valid, self.A * np.exp((robot[:, None, 2] + humans[..., 4] - dist) / self.B), 0.0)
+        acc += ((mag / dist)[..., None] * away).sum(axis=1)
+        new_v = v + self.config.time_step * acc
+        speed = np.linalg.norm(new_v, axis=-1)
+        return new_v * np.minimum(1.0, robot[:, 5] / np.maximum(speed, 1e-12))[:, None]
