@@ -141,7 +141,14 @@ def tables_cmd(args: argparse.Namespace) -> int:
     torch.set_num_threads(1)
     grid = leaderboard.cells(tuple(t.strip() for t in args.tables.split(",")))
     kwargs = {"checkpoint": args.checkpoint} if args.checkpoint else {}
-    results = leaderboard.evaluate_cells(args.policy, grid, args.episodes, args.seed, policy_kwargs=kwargs)
+    label = args.policy
+    if args.policy == "h2int":
+        from crowdbench.policies.h2int import DEFAULT_CHECKPOINT, load_checkpoint
+
+        variant = load_checkpoint(args.checkpoint or DEFAULT_CHECKPOINT)["variant"]
+        label = "h2int" if variant == "h2int" else f"h2int-{variant}"
+    results = leaderboard.evaluate_cells(args.policy, grid, args.episodes, args.seed, policy_kwargs=kwargs,
+                                         label=label)
     meta = {"command": "crowdbench " + " ".join(sys.argv[1:]), "policy": args.policy, "checkpoint": args.checkpoint,
             "episodes": args.episodes, "seed": args.seed}
     leaderboard.save(results, args.json, args.md, meta)

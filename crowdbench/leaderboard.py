@@ -48,8 +48,9 @@ def cells(tables: tuple[str, ...] = ("I", "II", "III")) -> list[Cell]:
 
 
 def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed: int = 0, num_worlds: int = 100,
-                   policy_kwargs: dict | None = None, progress: bool = True) -> list[dict[str, Any]]:
-    """Run every cell for one policy; returns one summary dict per cell."""
+                   policy_kwargs: dict | None = None, progress: bool = True,
+                   label: str | None = None) -> list[dict[str, Any]]:
+    """Run every cell for one policy; returns one summary dict per cell (``policy`` = ``label`` or the name)."""
     results = []
     for c in grid:
         t = time.time()
@@ -57,7 +58,7 @@ def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed
         eps = run_episodes(policy, episodes, seed=seed, num_worlds=num_worlds, layout=c.layout, num_humans=c.humans,
                            human_model="responsive_orca", human_model_kwargs={"responsiveness": c.rho})
         s = summarize(eps)
-        results.append({"policy": policy_name, "table": c.table, "row": c.row, "layout": c.layout,
+        results.append({"policy": label or policy_name, "table": c.table, "row": c.row, "layout": c.layout,
                         "humans": c.humans, "responsiveness": c.rho, "seed": seed, **s,
                         "wall_s": round(time.time() - t, 1)})
         if progress:
