@@ -124,6 +124,15 @@ def export_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def plot_cmd(args: argparse.Namespace) -> int:
+    """Plot success trends of several `crowdbench tables` result files."""
+    from crowdbench.leaderboard import plot_trends
+
+    plot_trends(args.results, args.out)
+    print(f"wrote {args.out}")
+    return 0
+
+
 def bench_cmd(args: argparse.Namespace) -> int:
     """Measure and print the throughput figures; write benchmarks/RESULTS.md and the throughput PNG."""
     from crowdbench.bench import main as bench_main
@@ -194,6 +203,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", default=None)
     p.add_argument("--md", default=None)
     p.set_defaults(func=tables_cmd)
+    p = sub.add_parser("plot", help="success trends of `tables` result files (ablation figure)")
+    p.add_argument("results", nargs="+", help="JSON files written by `crowdbench tables --json`")
+    p.add_argument("--out", default="trends.png")
+    p.set_defaults(func=plot_cmd)
     p = sub.add_parser("bench", help="measure throughput (simulator, ORCA, training, inference)")
     p.add_argument("--quick", action="store_true", help="fewer steps and repeats")
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")

@@ -83,3 +83,31 @@ def save(results: list[dict[str, Any]], json_path: str | None, md_path: str | No
         write_text(json_path, json.dumps({"meta": meta, "results": results}, indent=2) + "\n")
     if md_path:
         write_text(md_path, markdown(results))
+
+
+def plot_trends(result_files: list[str], path: str) -> None:
+    """Success rate per policy across Table I regimes and Table II crowd sizes (the paper's ablation figure)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from crowdbench.io import atomic_path
+
+    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), dpi=100, sharey=True)
+    for f in result_files:
+        with open(f) as fh:
+            res = json.load(fh)["results"]
+        name = res[0]["policy"]
+        for ax, table in zip(axes, ("I", "II"), strict=True):
+            rows = [r for r in res if r["table"] == table]
+            ax.plot([r["row"] for r in rows], [100 * r["success_rate"] for r in rows], "o-", label=name)
+    axes[0].set(title="Table I: response regime (N = 20)", ylabel="success rate [%]")
+    axes[1].set(title="Table II: crowd size (ρ = 0)")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+    axes[1].legend(fontsize=8)
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
