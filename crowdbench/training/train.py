@@ -46,7 +46,7 @@ class TrainConfig:
     humans_range: tuple[int, int] = (10, 30)
     """Pedestrians per training episode, drawn uniformly (covers the 10–30 of the paper's Table II)."""
     anneal: bool = True
-    """Responsiveness annealing (False: fixed ρ = ``rho_init``, the paper's no-annealing baseline)."""
+    """Responsiveness annealing (False: ρ fixed at ``rho_min`` from the start, the paper's no-annealing baseline)."""
     rho_init: float = 0.8
     rho_min: float = 0.0
     rho_delta: float = 0.1
@@ -116,7 +116,8 @@ class Trainer:
         self.cfg, self.out, self.quiet = cfg, out, quiet
         os.makedirs(out, exist_ok=True)
         torch.manual_seed(cfg.seed)
-        curriculum = Curriculum(rho_init=cfg.rho_init, rho_min=cfg.rho_min, delta=cfg.rho_delta, eta=cfg.eta,
+        # without annealing the crowd is at the final difficulty from the start (the paper's "abrupt, fixed" baseline)
+        curriculum = Curriculum(rho_init=cfg.rho_init if cfg.anneal else cfg.rho_min, rho_min=cfg.rho_min, delta=cfg.rho_delta, eta=cfg.eta,
                                 window=cfg.window, cooldown=cfg.window, enabled=cfg.anneal)
         self.env = CrowdVecEnv(cfg.num_envs, seed=cfg.seed, curriculum=curriculum, humans_range=cfg.humans_range,
                                reward_scale=cfg.reward_scale)

@@ -103,3 +103,9 @@ def test_curriculum_lowers_rho_only_after_window_and_cooldown():
     assert not c.record(np.zeros(10, bool), 30)  # success below η: no change
     fixed = Curriculum(enabled=False, window=2, cooldown=2)
     assert not fixed.record(np.ones(5, bool), 5) and fixed.rho == 0.8
+
+
+def test_no_anneal_trains_at_final_difficulty(tmp_path):
+    tr = train(tiny(iterations=1, anneal=False, eval_every=0), str(tmp_path / "fixed"), quiet=True)
+    assert tr.env.curriculum.rho == 0.0 and not tr.env.curriculum.enabled
+    assert tr.env.world.human_model.responsiveness == 0.0
