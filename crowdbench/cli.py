@@ -188,7 +188,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--iterations", type=int, default=None, help="stop after this many PPO iterations in total")
     p.add_argument("--minutes", type=float, default=None, help="wall-clock budget in minutes")
     p.add_argument("--envs", type=int, default=None, help="worlds stepped together (default 256)")
-    p.add_argument("--no-anneal", action="store_true", help="no curriculum: train at the final ρ (rho_min = 0) from the start")
+    p.add_argument("--no-anneal", action="store_true",
+                   help="no curriculum: train at the final ρ (rho_min = 0) from the start")
     p.set_defaults(func=train_cmd)
     p = sub.add_parser("export", help="export a checkpoint to TorchScript and ONNX")
     p.add_argument("--checkpoint", required=True)

@@ -117,8 +117,9 @@ class Trainer:
         os.makedirs(out, exist_ok=True)
         torch.manual_seed(cfg.seed)
         # without annealing the crowd is at the final difficulty from the start (the paper's "abrupt, fixed" baseline)
-        curriculum = Curriculum(rho_init=cfg.rho_init if cfg.anneal else cfg.rho_min, rho_min=cfg.rho_min, delta=cfg.rho_delta, eta=cfg.eta,
-                                window=cfg.window, cooldown=cfg.window, enabled=cfg.anneal)
+        curriculum = Curriculum(rho_init=cfg.rho_init if cfg.anneal else cfg.rho_min, rho_min=cfg.rho_min,
+                                delta=cfg.rho_delta, eta=cfg.eta, window=cfg.window, cooldown=cfg.window,
+                                enabled=cfg.anneal)
         self.env = CrowdVecEnv(cfg.num_envs, seed=cfg.seed, curriculum=curriculum, humans_range=cfg.humans_range,
                                reward_scale=cfg.reward_scale)
         self.runner = OnPolicyRunner(self.env, cfg.rsl_cfg(), log_dir=None)
