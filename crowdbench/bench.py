@@ -117,7 +117,7 @@ def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> dic
     return _stats(samples)
 
 
-def train_steps_per_s(iterations: int, repeats: int) -> dict[str, float]:
+def train_steps_per_s(iterations: int, repeats: int, update_threads: int = 1) -> dict[str, float]:
     import tempfile
 
     from crowdbench.training.train import TrainConfig, Trainer
@@ -125,8 +125,9 @@ def train_steps_per_s(iterations: int, repeats: int) -> dict[str, float]:
     samples = []
     for r in range(repeats):
         with tempfile.TemporaryDirectory() as tmp:
-            tr = Trainer(TrainConfig(iterations=iterations + 2, eval_every=0, checkpoint_every=10**6, seed=r), tmp,
-                         quiet=True)
+            cfg = TrainConfig(iterations=iterations + 2, eval_every=0, checkpoint_every=10**6, seed=r,
+                              update_threads=update_threads)
+            tr = Trainer(cfg, tmp, quiet=True)
             tr.cfg.iterations = 2  # warm-up (numba compilation, allocator)
             tr.train()
             steps0, t = tr.env_steps, time.perf_counter()
@@ -181,6 +182,7 @@ def run(quick: bool = False) -> dict[str, Any]:
                                                                            if n == 200 else (10 if quick else 60), rep)
         res["h2int_inference_ms"] = h2int_inference_ms(rep)
     res["train_steps_per_s"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3)
+    res["train_steps_per_s_2_update_threads"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3, 2)
     return res
 
 
@@ -198,6 +200,10 @@ def results_markdown(res: dict[str, Any]) -> str:
     s = res["train_steps_per_s"]
     lines.append(f"| train_steps_per_s (2 cores, 1 torch thread) | 10–30 | 256 | {s['median']:,.0f} | "
                  f"{s['spread']:,.0f} |")
+    if "train_steps_per_s_2_update_threads" in res:
+        s = res["train_steps_per_s_2_update_threads"]
+        lines.append(f"| train_steps_per_s (2 cores, 2 threads in updates) | 10–30 | 256 | {s['median']:,.0f} | "
+                     f"{s['spread']:,.0f} |")
     s = res["h2int_inference_ms"]
     lines.append(f"| h2int_inference_ms | 12 seen | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
     lines += ["", "Targets: " + "; ".join(f"{k} {'≤' if 'ms' in k else '≥'} {v:,}" for k, v in TARGETS.items()), ""]

@@ -87,7 +87,7 @@ def train_cmd(args: argparse.Namespace) -> int:
     if args.algo != "h2int":
         raise ValueError(f"train: unknown algorithm {args.algo!r}; valid choices: h2int")
     overrides = {"variant": args.variant, "seed": args.seed, "anneal": not args.no_anneal}
-    for name in ("iterations", "minutes", "envs"):
+    for name in ("iterations", "minutes", "envs", "update_threads"):
         value = getattr(args, name)
         if value is not None:
             overrides["num_envs" if name == "envs" else name] = value
@@ -188,6 +188,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--iterations", type=int, default=None, help="stop after this many PPO iterations in total")
     p.add_argument("--minutes", type=float, default=None, help="wall-clock budget in minutes")
     p.add_argument("--envs", type=int, default=None, help="worlds stepped together (default 256)")
+    p.add_argument("--update-threads", type=int, default=None, help="torch threads for PPO updates (default 1)")
     p.add_argument("--no-anneal", action="store_true",
                    help="no curriculum: train at the final ρ (rho_min = 0) from the start")
     p.set_defaults(func=train_cmd)

@@ -71,6 +71,9 @@ class TrainConfig:
     """Training rewards are multiplied by this (same optimal policy): it keeps the shared trunk's value-loss
     gradients (returns of ±20 otherwise) from drowning the policy gradient under joint gradient clipping."""
     value_loss_coef: float = 0.5
+    update_threads: int = 1
+    """torch threads for the PPO update (the rollout always uses 1; the environment is idle during updates, so a
+    second core can speed the update up — at the cost of bit-for-bit reproducibility across thread counts)."""
     checkpoint_every: int = 20
     eval_every: int = 20
     """Iterations between quick deterministic evaluations (circle crossing, 20 pedestrians, ρ = 0.5)."""
@@ -210,7 +213,9 @@ class Trainer:
                     rewards.append(float(rew.mean()))
                 alg.compute_returns(obs)
             t1 = time.time()
+            torch.set_num_threads(cfg.update_threads)
             losses = alg.update()
+            torch.set_num_threads(1)
             t2 = time.time()
             self.iteration += 1
             n = cfg.num_envs * cfg.steps_per_env
