@@ -133,6 +133,15 @@ def plot_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def curves_cmd(args: argparse.Namespace) -> int:
+    """Compare training runs (history.json files) on one figure."""
+    from crowdbench.training.train import plot_runs
+
+    plot_runs(args.histories, args.out)
+    print(f"wrote {args.out}")
+    return 0
+
+
 def bench_cmd(args: argparse.Namespace) -> int:
     """Measure and print the throughput figures; write benchmarks/RESULTS.md and the throughput PNG."""
     from crowdbench.bench import main as bench_main
@@ -209,6 +218,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("results", nargs="+", help="JSON files written by `crowdbench tables --json`")
     p.add_argument("--out", default="trends.png")
     p.set_defaults(func=plot_cmd)
+    p = sub.add_parser("curves", help="compare training runs (history.json files)")
+    p.add_argument("histories", nargs="+")
+    p.add_argument("--out", default="curves.png")
+    p.set_defaults(func=curves_cmd)
     p = sub.add_parser("bench", help="measure throughput (simulator, ORCA, training, inference)")
     p.add_argument("--quick", action="store_true", help="fewer steps and repeats")
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import os
 import sys
 import time
@@ -319,4 +318,33 @@ def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = F
     return trainer
 
 
-__all__ = ["TrainConfig", "Trainer", "math", "plot_curve", "train"]
+__all__ = ["TrainConfig", "Trainer", "plot_curve", "plot_runs", "train"]
+
+
+def plot_runs(history_files: list[str], path: str) -> None:
+    """Training success (last 200 episodes) and mean step reward of several runs against env steps (e.g. the
+    paper's annealing-vs-fixed-difficulty figure), with each run's ρ schedule dashed."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100)
+    for f in history_files:
+        with open(f) as fh:
+            run = json.load(fh)
+        cfg, h = run["config"], run["history"]
+        label = f"{cfg['variant']}{'' if cfg['anneal'] else ' (no annealing, ρ = 0)'}"
+        steps = np.asarray(h["env_steps"]) / 1e6
+        line = axes[0].plot(steps, h["train_success"], label=label)[0]
+        axes[0].plot(steps, h["rho"], "--", color=line.get_color(), alpha=0.6)
+        axes[1].plot(steps, np.asarray(h["mean_reward"]) / cfg.get("reward_scale", 1.0), label=label)
+    axes[0].set(xlabel="environment steps [M]", ylabel="training success / ρ (dashed)", ylim=(0, 1.02))
+    axes[1].set(xlabel="environment steps [M]", ylabel="mean reward per step")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left")
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
