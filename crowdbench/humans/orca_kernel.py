@@ -152,6 +152,14 @@ def _lp3(lp, ld, n, n_obst, begin, radius, res, pp, pd):
 
 
 @nb.njit(cache=True, inline="always")
+def _vertex_legs(rx, ry, dsq, r):
+    """Left and right leg directions of the velocity obstacle of a vertex at relative position (rx, ry)."""
+    leg = np.sqrt(dsq - r * r)
+    return ((rx * leg - ry * r) / dsq, (rx * r + ry * leg) / dsq,
+            (rx * leg + ry * r) / dsq, (-rx * r + ry * leg) / dsq)
+
+
+@nb.njit(cache=True, inline="always")
 def _cutoff_circle_line(vx, vy, cx, cy, rad, lp, ld, n):
     """Line ``n``: the velocity projected on the cut-off circle of centre (cx, cy) and radius ``rad``."""
     wx, wy = vx - cx, vy - cy
@@ -231,29 +239,23 @@ def _obstacle_lines(px, py, vx, vy, r, th_obst, max_speed, opoint, onext, oprev,
             n += 1
             continue
 
-        if s < 0.0 and dsq_line <= radius_sq:
+        if s < 0.0 and dsq_line <= radius_sq:  # viewed obliquely: the left vertex defines the obstacle
             if not oconvex[o1]:
                 continue
             o2 = o1
-            leg1 = np.sqrt(dsq1 - radius_sq)
-            llx, lly = (r1x * leg1 - r1y * r) / dsq1, (r1x * r + r1y * leg1) / dsq1
-            rlx, rly = (r1x * leg1 + r1y * r) / dsq1, (-r1x * r + r1y * leg1) / dsq1
-        elif s > 1.0 and dsq_line <= radius_sq:
+            llx, lly, rlx, rly = _vertex_legs(r1x, r1y, dsq1, r)
+        elif s > 1.0 and dsq_line <= radius_sq:  # viewed obliquely: the right vertex defines the obstacle
             if not oconvex[o2]:
                 continue
             o1 = o2
-            leg2 = np.sqrt(dsq2 - radius_sq)
-            llx, lly = (r2x * leg2 - r2y * r) / dsq2, (r2x * r + r2y * leg2) / dsq2
-            rlx, rly = (r2x * leg2 + r2y * r) / dsq2, (-r2x * r + r2y * leg2) / dsq2
+            llx, lly, rlx, rly = _vertex_legs(r2x, r2y, dsq2, r)
         else:
             if oconvex[o1]:
-                leg1 = np.sqrt(dsq1 - radius_sq)
-                llx, lly = (r1x * leg1 - r1y * r) / dsq1, (r1x * r + r1y * leg1) / dsq1
+                llx, lly, _, _ = _vertex_legs(r1x, r1y, dsq1, r)
             else:
                 llx, lly = -odir[o1, 0], -odir[o1, 1]
             if oconvex[o2]:
-                leg2 = np.sqrt(dsq2 - radius_sq)
-                rlx, rly = (r2x * leg2 + r2y * r) / dsq2, (-r2x * r + r2y * leg2) / dsq2
+                _, _, rlx, rly = _vertex_legs(r2x, r2y, dsq2, r)
             else:
                 rlx, rly = odir[o1, 0], odir[o1, 1]
 
