@@ -3,7 +3,8 @@
 Figures (medians of repeated runs, with the spread = max − min):
 
 * ``env_steps_per_s[N][batch]`` — circle crossing with latent-responsive ORCA pedestrians, world + pedestrian model
-  + robot observation, constant robot action, one core;
+  + robot observation, constant robot action, one core; each repeat times 200 consecutive steps (one 50 s episode
+  length, so the congested crossing phase and goal renewals are included, not just the cheap first steps);
 * ``orca_agent_steps_per_s[N]`` — the ORCA kernel alone, 64 worlds of N agents, one core;
 * ``train_steps_per_s`` — H²INT PPO training end to end (rollout + update), default configuration;
 * ``h2int_inference_ms`` — one decision for one robot (encoder + GRU + head), CPU, one thread.
@@ -175,8 +176,8 @@ def run(quick: bool = False) -> dict[str, Any]:
     with _one_core():
         for n in (10, 20, 30, 50):
             res["env_steps_per_s"][str(n)] = {
-                "1": env_steps_per_s(n, 1, 50 if quick else 400, rep),
-                "64": env_steps_per_s(n, 64, 5 if quick else 40, rep)}
+                "1": env_steps_per_s(n, 1, 20 if quick else 200, rep),
+                "64": env_steps_per_s(n, 64, 5 if quick else 200, rep)}
         for n in (20, 50, 200):
             res["orca_agent_steps_per_s"][str(n)] = orca_agent_steps_per_s(n, 64, (3 if quick else 20)
                                                                            if n == 200 else (10 if quick else 60), rep)
@@ -226,7 +227,7 @@ def plot(res: dict[str, Any], path: str) -> None:
                 title="circle crossing, latent-responsive ORCA")
     axes[0].legend()
     batches = [1, 8, 16, 32, 64, 128, 256] if not res.get("quick") else [1, 16, 64]
-    rates = [env_steps_per_s(20, b, max(5, 2000 // b) if not res.get("quick") else 5, 3)["median"] for b in batches]
+    rates = [env_steps_per_s(20, b, 200 if not res.get("quick") else 5, 3)["median"] for b in batches]
     axes[1].plot(batches, rates, "o-")
     axes[1].set(xlabel="worlds stepped together", ylabel="env steps / s (one core)", xscale="log", yscale="log",
                 title="N = 20")
