@@ -2,36 +2,26 @@
 
 from __future__ import annotations
 
-import contextlib
-import os
-import platform
 import statistics
 import time
 from collections.abc import Callable
 
 import numpy as np
 
+from crowdbench.bench import machine as bench_machine
+from crowdbench.bench import one_core
 from crowdbench.humans import HumanModel
 
 
 def pin_one_core() -> None:
-    """Run on one core (as the targets are stated) where the OS allows it."""
-    with contextlib.suppress(AttributeError, OSError):
-        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    """Run the rest of the script on one core (as the targets are stated)."""
+    one_core().__enter__()
 
 
 def machine() -> str:
-    cpu = platform.processor() or platform.machine()
-    try:
-        with open("/proc/cpuinfo") as f:
-            cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
-    except (OSError, StopIteration):
-        pass
-    import numba
-    import pymunk
-
-    return (f"{cpu}; {os.cpu_count()} logical cores; Python {platform.python_version()}; numpy {np.__version__}; "
-            f"numba {numba.__version__}; pymunk {pymunk.version}")
+    m = bench_machine()
+    return (f"{m['cpu']}; {m['logical_cores']} logical cores; Python {m['python']}; numpy {m['numpy']}; "
+            f"numba {m['numba']}; pymunk {m['pymunk']}")
 
 
 def time_it(fn: Callable[[], object], repeats: int = 7, number: int = 1) -> tuple[float, float]:

@@ -50,7 +50,8 @@ def _stats(samples: list[float]) -> dict[str, float]:
             "runs": len(samples)}
 
 
-def _one_core() -> contextlib.AbstractContextManager:
+def one_core() -> contextlib.AbstractContextManager:
+    """Context manager pinning this process to one core (where the OS allows it)."""
     @contextlib.contextmanager
     def pin():
         try:
@@ -173,7 +174,7 @@ def run(quick: bool = False) -> dict[str, Any]:
     """All figures; ``quick`` uses fewer steps and repeats (for smoke tests and CI)."""
     rep = 3 if quick else 7
     res: dict[str, Any] = {"machine": machine(), "quick": quick, "env_steps_per_s": {}, "orca_agent_steps_per_s": {}}
-    with _one_core():
+    with one_core():
         for n in (10, 20, 30, 50):
             res["env_steps_per_s"][str(n)] = {
                 "1": env_steps_per_s(n, 1, 20 if quick else 200, rep),
@@ -247,7 +248,7 @@ def main(quick: bool = False, json_path: str | None = None, out_dir: str = "benc
     print(md)
     os.makedirs(out_dir, exist_ok=True)
     write_text(os.path.join(out_dir, "RESULTS.md"), md)
-    with _one_core():
+    with one_core():
         plot(res, os.path.join(out_dir, "throughput.png"))
     if json_path:
         write_text(json_path, json.dumps(res, indent=2) + "\n")

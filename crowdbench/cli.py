@@ -98,7 +98,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         saved = load_checkpoint(path)["train_config"]
         saved["humans_range"] = tuple(saved["humans_range"])
         saved["head_dims"] = tuple(saved["head_dims"])
-        cfg = TrainConfig(**{**saved, **{k: v for k, v in overrides.items() if getattr(args, "_set_" + k, False)}})
+        cfg = TrainConfig(**saved)  # a resumed run keeps its configuration; only its budget may change
         for name in ("iterations", "minutes"):
             if getattr(args, name) is not None:
                 cfg = dataclasses.replace(cfg, **{name: getattr(args, name)})

@@ -6,7 +6,7 @@ do not depend on how many worlds run at once (for policies without cross-world s
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -14,7 +14,7 @@ import numpy as np
 from crowdbench.config import make_config
 from crowdbench.policies.base import RobotPolicy
 from crowdbench.robots.observations import make_observation
-from crowdbench.worlds.world import COLLISION, OUTCOMES, SUCCESS, TIMEOUT, CrowdWorld
+from crowdbench.worlds.world import OUTCOMES, CrowdWorld
 
 
 @dataclass
@@ -99,5 +99,3 @@ def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: 
             prev_v[done] = 0.0
     return sorted(out, key=lambda e: e.seed)
 
-
-__all__ = ["COLLISION", "SUCCESS", "TIMEOUT", "Episode", "asdict", "run_episodes", "summarize"]

@@ -55,7 +55,7 @@ class Curriculum:
         return False
 
     def state_dict(self) -> dict[str, Any]:
-        d = {k: v for k, v in asdict(self).items()}
+        d = asdict(self)
         d.update(rho=self.rho, recent=list(self.recent), since_change=self.since_change,
                  changes=[list(c) for c in self.changes])
         return d
