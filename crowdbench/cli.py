@@ -87,7 +87,7 @@ def train_cmd(args: argparse.Namespace) -> int:
     if args.algo != "h2int":
         raise ValueError(f"train: unknown algorithm {args.algo!r}; valid choices: h2int")
     overrides = {"variant": args.variant, "seed": args.seed, "anneal": not args.no_anneal}
-    for name in ("iterations", "minutes", "envs", "update_threads"):
+    for name in ("iterations", "minutes", "envs", "threads", "env_processes", "epochs", "mini_batches"):
         value = getattr(args, name)
         if value is not None:
             overrides["num_envs" if name == "envs" else name] = value
@@ -95,11 +95,9 @@ def train_cmd(args: argparse.Namespace) -> int:
         from crowdbench.policies.h2int import load_checkpoint
 
         path = os.path.join(args.resume, "last.pt") if os.path.isdir(args.resume) else args.resume
-        saved = load_checkpoint(path)["train_config"]
-        saved["humans_range"] = tuple(saved["humans_range"])
-        saved["head_dims"] = tuple(saved["head_dims"])
-        cfg = TrainConfig(**saved)  # a resumed run keeps its configuration; only its budget may change
-        for name in ("iterations", "minutes"):
+        # a resumed run keeps its configuration; only its budget and speed settings may change
+        cfg = TrainConfig.from_dict(load_checkpoint(path)["train_config"])
+        for name in ("iterations", "minutes", "threads", "env_processes"):
             if getattr(args, name) is not None:
                 cfg = dataclasses.replace(cfg, **{name: getattr(args, name)})
         out = args.out or os.path.dirname(os.path.abspath(path))
@@ -197,7 +195,12 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--iterations", type=int, default=None, help="stop after this many PPO iterations in total")
     p.add_argument("--minutes", type=float, default=None, help="wall-clock budget in minutes")
     p.add_argument("--envs", type=int, default=None, help="worlds stepped together (default 256)")
-    p.add_argument("--update-threads", type=int, default=None, help="torch threads for PPO updates (default 1)")
+    p.add_argument("--threads", type=int, default=None,
+                   help="CPU threads for the network, data-parallel over samples (default 2)")
+    p.add_argument("--env-processes", type=int, default=None,
+                   help="processes stepping the worlds (default 2; results are identical for any value)")
+    p.add_argument("--epochs", type=int, default=None, help="PPO epochs per iteration (default 2)")
+    p.add_argument("--mini-batches", type=int, default=None, help="PPO mini-batches per epoch (default 4)")
     p.add_argument("--no-anneal", action="store_true",
                    help="no curriculum: train at the final ρ (rho_min = 0) from the start")
     p.set_defaults(func=train_cmd)

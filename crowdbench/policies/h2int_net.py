@@ -18,14 +18,15 @@ calls the actor first), computing it through the shared trunk otherwise.
 
 from __future__ import annotations
 
-import math
-
 import torch
 import torch.nn as nn
+import torch.nn.functional as F  # noqa: N812 - the PyTorch convention
 from rsl_rl.algorithms import PPO
 from rsl_rl.models import MLPModel
 from rsl_rl.modules import RNN, EmpiricalNormalization
 from tensordict import TensorDict
+
+from crowdbench.policies.parallel import parallel_map
 
 VARIANTS = ("h2int", "flat", "meanpool", "standard")
 EDGE_SCALE = 5.0
@@ -52,7 +53,12 @@ class GRUGate(nn.Module):
 
 
 class Stage(nn.Module):
-    """One encoder stage: Y = Gate₁(X, MHA(LN(X))), X' = Gate₂(Y, FFN(LN(Y))) (plain residuals for ``standard``)."""
+    """One encoder stage: Y = Gate₁(X, MHA(LN(X))), X' = Gate₂(Y, FFN(LN(Y))) (plain residuals for ``standard``).
+
+    ``robot_only=True`` (used for the last stage) returns only the robot token's output ``(B, d)``: every other
+    token's output would be discarded, so only its keys and values are computed — the same result at about half the
+    cost of the stage.
+    """
 
     def __init__(self, d: int, heads: int, ffn: int, gated: bool, attention: bool) -> None:
         super().__init__()
@@ -64,25 +70,32 @@ class Stage(nn.Module):
         if gated:
             self.gate1, self.gate2 = GRUGate(d), GRUGate(d)
 
-    def mix(self, x: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
-        """Masked multi-head self-attention (or masked mean pooling) over tokens ``(B, S, d)``; ``valid`` ``(B, S)``."""
+    def mix(self, x: torch.Tensor, valid: torch.Tensor, robot_only: bool = False) -> torch.Tensor:
+        """Masked multi-head self-attention (or masked mean pooling) over tokens ``x`` ``(B, S, d)``, ``valid``
+        ``(B, S)`` → ``(B, S, d)``, or ``(B, 1, d)`` (the robot token's) when ``robot_only``."""
         B, S, d = x.shape
-        q, k, v = self.qkv(x).chunk(3, dim=-1)
+        h, w, b = self.heads, self.qkv.weight, self.qkv.bias
+        kv = F.linear(x, w[d:], b[d:])
+        k, v = kv[..., :d], kv[..., d:]
         if not self.attention:  # meanpool: every token receives the mean of the valid tokens' values
-            w = valid.to(v.dtype).unsqueeze(-1)
-            pooled = (v * w).sum(1, keepdim=True) / w.sum(1, keepdim=True)
-            return self.out(pooled.expand(B, S, d))
-        h = self.heads
-        q = q.view(B, S, h, d // h).transpose(1, 2)
+            m = valid.to(v.dtype).unsqueeze(-1)
+            pooled = self.out((v * m).sum(1, keepdim=True) / m.sum(1, keepdim=True))
+            return pooled if robot_only else pooled.expand(B, S, d)
+        xq = x[:, :1] if robot_only else x
+        q = F.linear(xq, w[:d], b[:d])
+        L = q.shape[1]
+        q = q.view(B, L, h, d // h).transpose(1, 2)
         k = k.view(B, S, h, d // h).transpose(1, 2)
         v = v.view(B, S, h, d // h).transpose(1, 2)
-        scores = q @ k.transpose(-1, -2) / math.sqrt(d // h)
-        scores = scores.masked_fill(~valid[:, None, None, :], float("-inf"))  # keys: padded / unseen never contribute
-        att = torch.softmax(scores, dim=-1) @ v
-        return self.out(att.transpose(1, 2).reshape(B, S, d))
+        # keys of padded / unseen pedestrians never contribute (the robot key is always valid: no empty rows)
+        att = F.scaled_dot_product_attention(q, k, v, attn_mask=valid[:, None, None, :])
+        return self.out(att.transpose(1, 2).reshape(B, L, d))
 
-    def forward(self, x: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
-        a = self.mix(self.ln1(x), valid)
+    def forward(self, x: torch.Tensor, valid: torch.Tensor, robot_only: bool = False) -> torch.Tensor:
+        """``x`` ``(B, S, d)`` → ``(B, S, d)``, or the robot token's output ``(B, d)`` when ``robot_only``."""
+        a = self.mix(self.ln1(x), valid, robot_only)
+        if robot_only:
+            x, a = x[:, 0], a[:, 0]
         y = self.gate1(x, a) if self.gated else x + a
         f = self.ffn(self.ln2(y))
         return self.gate2(y, f) if self.gated else y + f
@@ -102,6 +115,7 @@ class H2INTEncoder(nn.Module):
         self.type_emb = nn.Embedding(2, d_model)
         self.pos_emb = nn.Embedding(n_max + 1, d_model)
         n_stages = 1 if variant == "flat" else 2
+        self.n_stages = n_stages
         self.stages = nn.ModuleList(Stage(d_model, heads, ffn, gated=variant != "standard",
                                           attention=variant != "meanpool") for _ in range(n_stages))
         self.final_ln = nn.LayerNorm(d_model)
@@ -121,9 +135,9 @@ class H2INTEncoder(nn.Module):
         phi_e = self.edge_mlp(edges / self.edge_scale)
         x = torch.cat([phi_r, phi_e], 1) + self.type_emb(self.types[: n + 1]) + self.pos_emb(self.positions[: n + 1])
         tok_valid = torch.cat([valid.new_ones((valid.shape[0], 1)), valid], 1)  # the robot token is always valid
-        for stage in self.stages:
-            x = stage(x, tok_valid)
-        return self.final_ln(x[:, 0])
+        for i, stage in enumerate(self.stages):  # the last stage computes the robot token only: x → (B, d)
+            x = stage(x, tok_valid, i == self.n_stages - 1)
+        return self.final_ln(x)
 
 
 class H2INTActor(MLPModel):
@@ -144,6 +158,8 @@ class H2INTActor(MLPModel):
         self.encoder = H2INTEncoder(n_max, variant, d_model, heads, ffn)
         self.rnn = RNN(d_model, gru_hidden, 1, "gru")
         self._cache: tuple | None = None
+        self.threads = 1
+        """CPU threads the encoder splits a batch across (set by the trainer; not saved)."""
 
     def _get_obs_dim(self, obs, obs_groups, obs_set):
         return ["robot", "humans", "mask"], 9
@@ -153,14 +169,22 @@ class H2INTActor(MLPModel):
 
     def bucketed(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor, buckets: int = 4):
         """Encode samples grouped by how many pedestrians they see, each group trimmed to its own maximum: exact
-        (samples are independent), and most samples see few pedestrians, so little attention is spent on padding."""
+        (samples are independent), and most samples see few pedestrians, so little attention is spent on padding.
+        With ``self.threads > 1`` the samples are dealt round-robin (in that order, so the shares cost the same) to
+        that many threads, forward and backward (:mod:`crowdbench.policies.parallel`)."""
         if robot.shape[0] < 64:
             return self.encoder(robot, edges, valid, trim=True)
         cols = torch.arange(1, valid.shape[1] + 1, device=valid.device)
         order = torch.argsort((valid.long() * cols).amax(1))  # by last valid column
+
+        def encode(idx: torch.Tensor) -> torch.Tensor:
+            return torch.cat([self.encoder(robot[i], edges[i], valid[i], trim=True) for i in idx.chunk(buckets)])
+
+        if self.threads > 1 and robot.shape[0] >= 64 * self.threads:
+            shares = [order[k:: self.threads] for k in range(self.threads)]
+            return parallel_map(self.encoder, encode, shares, robot.shape[0])
         out = robot.new_empty((robot.shape[0], self.encoder.final_ln.normalized_shape[0]))
-        for idx in order.chunk(buckets):
-            out[idx] = self.encoder(robot[idx], edges[idx], valid[idx], trim=True)
+        out[order] = encode(order)
         return out
 
     def encode(self, obs: TensorDict, masks: torch.Tensor | None = None) -> torch.Tensor:

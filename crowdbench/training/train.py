@@ -70,14 +70,29 @@ class TrainConfig:
     """Training rewards are multiplied by this (same optimal policy): it keeps the shared trunk's value-loss
     gradients (returns of ±20 otherwise) from drowning the policy gradient under joint gradient clipping."""
     value_loss_coef: float = 0.5
-    update_threads: int = 1
-    """torch threads for the PPO update (the rollout always uses 1; the environment is idle during updates, so a
-    second core can speed the update up — at the cost of bit-for-bit reproducibility across thread counts)."""
+    threads: int = 2
+    """CPU threads the network's batches are split across, forward and backward, in rollouts and updates
+    (:mod:`crowdbench.policies.parallel`). Deterministic for a given count; other counts differ in the last bits of
+    the gradient sums."""
+    env_processes: int = 2
+    """Processes stepping the worlds (:mod:`crowdbench.training.shards`): a speed setting only — results are
+    identical for any value."""
     checkpoint_every: int = 20
     eval_every: int = 20
     """Iterations between quick deterministic evaluations (circle crossing, 20 pedestrians, ρ = 0.5)."""
     eval_episodes: int = 100
     extra: dict[str, Any] = field(default_factory=dict)
+
+    @classmethod
+    def from_dict(cls, d: dict[str, Any]) -> TrainConfig:
+        """The configuration saved in a checkpoint (older checkpoints' ``update_threads`` becomes ``threads``)."""
+        d = dict(d)
+        if "update_threads" in d:
+            d["threads"] = d.pop("update_threads")
+        for key in ("humans_range", "head_dims"):
+            if key in d:
+                d[key] = tuple(d[key])
+        return cls(**d)
 
     def __post_init__(self) -> None:
         if self.variant not in VARIANTS:
@@ -123,9 +138,10 @@ class Trainer:
                                 delta=cfg.rho_delta, eta=cfg.eta, window=cfg.window, cooldown=cfg.window,
                                 enabled=cfg.anneal)
         self.env = CrowdVecEnv(cfg.num_envs, seed=cfg.seed, curriculum=curriculum, humans_range=cfg.humans_range,
-                               reward_scale=cfg.reward_scale)
+                               reward_scale=cfg.reward_scale, processes=cfg.env_processes)
         self.runner = OnPolicyRunner(self.env, cfg.rsl_cfg(), log_dir=None)
         self.alg = self.runner.alg
+        self.alg.actor.threads = cfg.threads
         self.iteration = 0
         self.env_steps = 0
         self.elapsed = 0.0
@@ -212,9 +228,7 @@ class Trainer:
                     rewards.append(float(rew.mean()))
                 alg.compute_returns(obs)
             t1 = time.time()
-            torch.set_num_threads(cfg.update_threads)
             losses = alg.update()
-            torch.set_num_threads(1)
             t2 = time.time()
             self.iteration += 1
             n = cfg.num_envs * cfg.steps_per_env
@@ -253,6 +267,10 @@ class Trainer:
         self.writer.close()
         if not self.quiet:
             print()
+
+    def close(self) -> None:
+        """Stop the environment's worker processes."""
+        self.env.close()
 
     def _progress(self, row: dict[str, Any]) -> None:
         if self.quiet:
@@ -314,7 +332,10 @@ def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = F
     if resume:
         path = os.path.join(resume, "last.pt") if os.path.isdir(resume) else resume
         trainer.load(path)
-    trainer.train()
+    try:
+        trainer.train()
+    finally:
+        trainer.close()
     return trainer
 
 

@@ -17,8 +17,8 @@ from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
 from crowdbench.config import make_config
-from crowdbench.robots.observations import make_observation
-from crowdbench.worlds.world import COLLISION, SUCCESS, TIMEOUT, CrowdWorld
+from crowdbench.training.shards import ShardedWorlds, ShardSpec
+from crowdbench.worlds.world import COLLISION, SUCCESS, TIMEOUT
 
 
 @dataclass
@@ -71,22 +71,24 @@ class CrowdVecEnv(VecEnv):
 
     Args:
         num_envs: Worlds stepped together.
-        seed: Master seed; episode seeds are drawn from ``np.random.default_rng(seed)``.
+        seed: Master seed; episode seeds are drawn from ``np.random.default_rng(seed)``, in world order.
         curriculum: Responsiveness schedule (its ρ is applied at every episode start).
         reward_scale: Multiplies the rewards handed to PPO (outcomes and metrics are unaffected).
+        processes: Processes stepping the worlds (:class:`~crowdbench.training.shards.ShardedWorlds`; the same
+            numbers for any value). Call :meth:`close` when done with more than one.
         layout, human_model, human_model_kwargs: As for :class:`~crowdbench.worlds.CrowdWorld`.
         **world_options: :class:`~crowdbench.config.WorldConfig` fields (e.g. ``humans_range=(10, 30)``).
     """
 
     def __init__(self, num_envs: int = 128, seed: int = 0, curriculum: Curriculum | None = None,
                  layout: str = "circle_crossing", human_model: str = "responsive_orca",
-                 human_model_kwargs: dict | None = None, reward_scale: float = 1.0, **world_options: Any) -> None:
+                 human_model_kwargs: dict | None = None, reward_scale: float = 1.0, processes: int = 1,
+                 **world_options: Any) -> None:
         self.reward_scale = reward_scale
         self.curriculum = curriculum or Curriculum(enabled=False)
         kwargs = {"responsiveness": self.curriculum.rho, **(human_model_kwargs or {})}
         self.config = make_config(**world_options)
-        self.world = CrowdWorld(self.config, num_envs, layout, human_model, kwargs)
-        self.obs_builder = make_observation("relative", self.config)
+        self.worlds = ShardedWorlds(ShardSpec(self.config, num_envs, layout, human_model, kwargs), processes)
         self.num_envs = num_envs
         self.num_actions = 2
         self.max_episode_length = self.config.max_steps
@@ -104,39 +106,39 @@ class CrowdVecEnv(VecEnv):
 
     def reset_all(self) -> None:
         """Start fresh episodes in every world (seeds from the master generator)."""
-        self._set_rho()
-        self.world.reset(seeds=self._seeds(self.num_envs))
-        self.episode_length_buf = torch.zeros(self.num_envs, dtype=torch.long)
+        self._set_obs(*self.worlds.reset(self._seeds(self.num_envs), None, self.curriculum.rho))
 
-    def _set_rho(self) -> None:
-        model = self.world.human_model
-        if hasattr(model, "set_responsiveness"):
-            model.set_responsiveness(self.curriculum.rho)
+    def _set_obs(self, obs: dict[str, np.ndarray], steps: np.ndarray) -> None:
+        self._obs = TensorDict({k: torch.from_numpy(v) for k, v in obs.items()}, batch_size=[self.num_envs])
+        self.episode_length_buf = torch.from_numpy(steps)
 
     def get_observations(self) -> TensorDict:
-        obs = self.obs_builder.build(self.world)
-        return TensorDict({k: torch.from_numpy(v) for k, v in obs.items()}, batch_size=[self.num_envs])
+        return self._obs
 
     def step(self, actions: torch.Tensor):
-        self.world.steps[:] = self.episode_length_buf.numpy()  # honours init_at_random_ep_len
-        res = self.world.step(actions.detach().cpu().numpy().astype(np.float64))
-        done = res.terminated | res.truncated
+        reward, terminated, truncated, outcome = self.worlds.step(
+            actions.detach().cpu().numpy().astype(np.float64), self.episode_length_buf.numpy())
+        done = terminated | truncated
         log: dict[str, float] = {"rho": self.curriculum.rho}
+        seeds: list[int] = []
         if done.any():
-            outcomes = res.outcome[done]
+            outcomes = outcome[done]
             self.episodes += len(outcomes)
             self.totals += np.bincount(outcomes, minlength=4)
             self.window_outcomes.extend(int(o) for o in outcomes)
             self.curriculum.record(outcomes == SUCCESS, self.episodes)
-            self._set_rho()
-            self.world.reset(seeds=self._seeds(int(done.sum())), mask=done)
+            seeds = self._seeds(int(done.sum()))
+        self._set_obs(*self.worlds.reset(seeds, done, self.curriculum.rho))
         w = np.asarray(self.window_outcomes) if self.window_outcomes else np.zeros(1, dtype=int) - 1
         log.update(success_rate=float(np.mean(w == SUCCESS)), collision_rate=float(np.mean(w == COLLISION)),
                    timeout_rate=float(np.mean(w == TIMEOUT)))
-        self.episode_length_buf = torch.from_numpy(self.world.steps.copy())
-        extras = {"time_outs": torch.from_numpy(res.truncated), "log": {f"Crowd/{k}": v for k, v in log.items()}}
-        rewards = torch.from_numpy((res.reward * self.reward_scale).astype(np.float32))
+        extras = {"time_outs": torch.from_numpy(truncated), "log": {f"Crowd/{k}": v for k, v in log.items()}}
+        rewards = torch.from_numpy((reward * self.reward_scale).astype(np.float32))
         return self.get_observations(), rewards, torch.from_numpy(done), extras
+
+    def close(self) -> None:
+        """Stop the worker processes (if any)."""
+        self.worlds.close()
 
     def state_dict(self) -> dict[str, Any]:
         """Curriculum, outcome statistics and the master generator (worlds restart at a checkpoint)."""

@@ -1,0 +1,99 @@
+"""The training speed-ups change nothing but speed: sharded worlds, data-parallel threads, robot-only last stage."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+from tensordict import TensorDict
+
+from crowdbench.config import make_config
+from crowdbench.policies.h2int_net import VARIANTS, H2INTActor, H2INTEncoder
+from crowdbench.training.shards import ShardedWorlds, ShardSpec
+from crowdbench.training.vecenv import CrowdVecEnv, Curriculum
+
+
+def _rollout(processes: int, steps: int = 150) -> tuple[list, float, int]:
+    env = CrowdVecEnv(24, seed=3, processes=processes, humans_range=(10, 30),
+                      curriculum=Curriculum(window=20, cooldown=20))
+    g = torch.Generator().manual_seed(0)
+    out = []
+    try:
+        for _ in range(steps):
+            obs, rew, done, extras = env.step(torch.randn(24, 2, generator=g))
+            out.append((obs["robot"].clone(), obs["humans"].clone(), obs["mask"].clone(), rew.clone(), done.clone(),
+                        extras["time_outs"].clone(), env.episode_length_buf.clone()))
+    finally:
+        env.close()
+    return out, env.curriculum.rho, env.episodes
+
+
+def test_sharded_worlds_give_identical_rollouts():
+    one, rho1, eps1 = _rollout(1)
+    three, rho3, eps3 = _rollout(3)
+    assert eps1 == eps3 > 10  # episodes ended and restarted (auto-reset with fresh seeds) during the rollout
+    assert rho1 == rho3
+    for a, b in zip(one, three, strict=True):
+        for x, y in zip(a, b, strict=True):
+            assert torch.equal(x, y)
+
+
+def test_shard_worker_errors_are_reported():
+    spec = ShardSpec(make_config(), 4, "circle_crossing", "responsive_orca", {"responsiveness": 0.5})
+    worlds = ShardedWorlds(spec, processes=2)
+    try:
+        with pytest.raises(RuntimeError, match="worker failed"):  # the worker's traceback is raised here
+            worlds.call("step", [(np.zeros((2, 2)), np.zeros(2, dtype=np.int64)), (None, None)])
+    finally:
+        worlds.close()
+    with pytest.raises(ValueError, match="processes"):
+        ShardedWorlds(spec, processes=5)
+
+
+def _batch(n: int = 512, n_max: int = 30, seed: int = 0):
+    g = torch.Generator().manual_seed(seed)
+    robot = torch.randn(n, 9, generator=g)
+    edges = torch.randn(n, n_max, 2, generator=g) * 3
+    seen = torch.randint(0, n_max + 1, (n,), generator=g)
+    valid = torch.arange(n_max)[None] < seen[:, None]  # sorted by distance: padding at the end
+    return robot, edges, valid
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_data_parallel_threads_match_one_thread(variant):
+    robot, edges, valid = _batch()
+    obs = TensorDict({"robot": robot, "humans": edges, "mask": valid.float()}, batch_size=[len(robot)])
+    torch.manual_seed(0)
+    actor = H2INTActor(obs, {"actor": ["robot"]}, "actor", 2, variant=variant)
+    results = []
+    for threads in (1, 2):
+        actor.threads = threads
+        actor.zero_grad()
+        z = actor.bucketed(robot, edges, valid)
+        (z.square().sum() + z[:, 0].sum()).backward()
+        results.append((z.detach(), [p.grad.clone() for p in actor.encoder.parameters() if p.grad is not None]))
+        with torch.inference_mode():
+            assert torch.allclose(actor.bucketed(robot, edges, valid), z.detach(), atol=1e-6)
+    (z1, g1), (z2, g2) = results
+    assert torch.allclose(z1, z2, atol=1e-6)  # grouping changes only the padding, i.e. kernel rounding
+    assert len(g1) == len(g2) > 10
+    for a, b in zip(g1, g2, strict=True):
+        # float32 sums over 512 samples in another order: equal to a relative 1e-5 of the gradient's norm
+        assert (a - b).norm() <= 1e-5 * a.norm() + 1e-7
+
+
+@pytest.mark.parametrize("variant", VARIANTS)
+def test_robot_only_last_stage_equals_full_stage(variant):
+    """The last stage computes only the robot token; a full pass over every token gives the same robot output."""
+    robot, edges, valid = _batch(64)
+    torch.manual_seed(1)
+    enc = H2INTEncoder(30, variant)
+    z = enc(robot, edges, valid)
+    # reference: the same computation with every stage over all tokens, robot token taken at the end
+    phi_r = enc.robot_mlp(enc.robot_norm(robot)).unsqueeze(1)
+    x = torch.cat([phi_r, enc.edge_mlp(edges / enc.edge_scale)], 1) + enc.type_emb(enc.types) + enc.pos_emb(
+        enc.positions)
+    tok = torch.cat([valid.new_ones((len(robot), 1)), valid], 1)
+    for stage in enc.stages:
+        x = stage(x, tok)
+    assert torch.allclose(z, enc.final_ln(x[:, 0]), atol=1e-5)
