@@ -172,6 +172,25 @@ def tables_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def leaderboard_cmd(args: argparse.Namespace) -> int:
+    """Every leaderboard entry on the paper's grid → ``OUT/<entry>.json|md`` and ``OUT/LEADERBOARD.md``."""
+    import torch
+
+    from crowdbench import leaderboard
+
+    torch.set_num_threads(1)
+    names = [n.strip() for n in args.entries.split(",")] if args.entries else list(leaderboard.ENTRIES)
+    unknown = [n for n in names if n not in leaderboard.ENTRIES]
+    if unknown:
+        raise ValueError(f"--entries: unknown {unknown}; valid choices: {', '.join(leaderboard.ENTRIES)}")
+    entries = [leaderboard.ENTRIES[n] for n in names] + [leaderboard.parse_entry(a) for a in args.add]
+    leaderboard.run_leaderboard(entries, args.out, args.episodes, args.seed,
+                                tuple(t.strip() for t in args.tables.split(",")), force=args.force)
+    with open(os.path.join(args.out, "LEADERBOARD.md")) as f:
+        print(f.read())
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="crowdbench", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -217,6 +236,16 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", default=None)
     p.add_argument("--md", default=None)
     p.set_defaults(func=tables_cmd)
+    p = sub.add_parser("leaderboard", help="the paper's tables for every method (cached per method)")
+    p.add_argument("--entries", default=None, help="comma-separated subset of the shipped entries (default: all)")
+    p.add_argument("--add", action="append", default=[], metavar="LABEL=POLICY[@CHECKPOINT]",
+                   help="an extra row: any registered robot policy (repeatable)")
+    p.add_argument("--episodes", type=int, default=500)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--tables", default="I,II,III", help="comma-separated subset of I, II, III")
+    p.add_argument("--out", default="leaderboards", help="folder for the results")
+    p.add_argument("--force", action="store_true", help="re-evaluate even when cached results match")
+    p.set_defaults(func=leaderboard_cmd)
     p = sub.add_parser("plot", help="success trends of `tables` result files (ablation figure)")
     p.add_argument("results", nargs="+", help="JSON files written by `crowdbench tables --json`")
     p.add_argument("--out", default="trends.png")

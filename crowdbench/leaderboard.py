@@ -111,3 +111,158 @@ def plot_trends(result_files: list[str], path: str) -> None:
     with atomic_path(path, suffix=".png") as tmp:
         fig.savefig(tmp, format="png")
     plt.close(fig)
+
+
+# ---------------------------------------------------------------------------------------------------- leaderboard
+@dataclass(frozen=True)
+class Entry:
+    """One leaderboard row: a display label, a registered robot policy and its keyword arguments."""
+
+    label: str
+    policy: str
+    kwargs: tuple[tuple[str, Any], ...] = ()
+    group: str = "main"
+    """``main`` (the methods compared in Tables I–III) or ``ablation`` (H²INT variants)."""
+
+    @property
+    def slug(self) -> str:
+        """File stem of this entry's results in the leaderboard folder."""
+        return "".join(ch if ch.isalnum() or ch in "-_" else "-" for ch in self.label.lower()).strip("-")
+
+    def policy_kwargs(self) -> dict[str, Any]:
+        return dict(self.kwargs)
+
+
+def _checkpoint(name: str) -> str:
+    import os
+
+    return os.path.normpath(os.path.join(os.path.dirname(__file__), "..", "leaderboards", "checkpoints", name))
+
+
+ENTRIES: dict[str, Entry] = {e.slug: e for e in (
+    Entry("orca", "orca"),
+    Entry("social_force", "social_force"),
+    Entry("h2int", "h2int", (("checkpoint", _checkpoint("h2int.pt")),)),
+    Entry("h2int-flat", "h2int", (("checkpoint", _checkpoint("flat.pt")),), "ablation"),
+    Entry("h2int-meanpool", "h2int", (("checkpoint", _checkpoint("meanpool.pt")),), "ablation"),
+    Entry("h2int-standard", "h2int", (("checkpoint", _checkpoint("standard.pt")),), "ablation"),
+)}
+"""The shipped leaderboard's rows (the learned baselines CADRL, SARL, DS-RNN and AIG-GST join as they land)."""
+
+
+def parse_entry(spec: str) -> Entry:
+    """``LABEL=POLICY`` or ``LABEL=POLICY@CHECKPOINT`` (a policy registered in :data:`~crowdbench.policies.POLICIES`,
+    e.g. through the ``crowdbench.policies`` entry point) → :class:`Entry`."""
+    from crowdbench.policies import POLICIES
+
+    if "=" not in spec:
+        raise ValueError(f"--add {spec!r}: expected LABEL=POLICY or LABEL=POLICY@CHECKPOINT")
+    label, rest = (s.strip() for s in spec.split("=", 1))
+    policy, _, ckpt = rest.partition("@")
+    if policy not in POLICIES.names():
+        raise ValueError(f"--add {spec!r}: unknown policy {policy!r}; valid choices: {', '.join(POLICIES.names())}")
+    return Entry(label, policy, (("checkpoint", ckpt),) if ckpt else ())
+
+
+def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
+    """What a cached result must match to be reused: policy, arguments, checkpoint contents, episodes, seed."""
+    import hashlib
+    import os
+
+    kwargs = entry.policy_kwargs()
+    digest = None
+    ckpt = kwargs.get("checkpoint")
+    if ckpt and os.path.exists(ckpt):
+        with open(ckpt, "rb") as f:
+            digest = hashlib.sha256(f.read()).hexdigest()
+    shown = {k: (os.path.relpath(v) if k == "checkpoint" else v) for k, v in kwargs.items()}
+    return {"policy": entry.policy, "kwargs": shown, "checkpoint_sha256": digest, "episodes": episodes, "seed": seed}
+
+
+def run_leaderboard(entries: list[Entry], out_dir: str, episodes: int = 500, seed: int = 0,
+                    tables: tuple[str, ...] = ("I", "II", "III"), force: bool = False,
+                    progress: bool = True) -> dict[str, list[dict[str, Any]]]:
+    """Evaluate every entry on the grid (reusing ``out_dir/<slug>.json`` when its fingerprint and cells match, unless
+    ``force``), write each entry's JSON/markdown and ``out_dir/LEADERBOARD.md``; returns results by label."""
+    import os
+
+    grid = cells(tables)
+    wanted = {(c.table, c.row) for c in grid}
+    board: dict[str, list[dict[str, Any]]] = {}
+    for entry in entries:
+        path = os.path.join(out_dir, f"{entry.slug}.json")
+        fp = _fingerprint(entry, episodes, seed)
+        cached = None
+        if not force and os.path.exists(path):
+            with open(path) as f:
+                saved = json.load(f)
+            have = {(r["table"], r["row"]) for r in saved.get("results", [])}
+            if saved.get("meta", {}).get("fingerprint") == fp and wanted <= have:
+                cached = [r for r in saved["results"] if (r["table"], r["row"]) in wanted]
+        if cached is not None:
+            if progress:
+                print(f"{entry.label}: up to date ({path})", flush=True)
+            board[entry.label] = cached
+            continue
+        if progress:
+            print(f"{entry.label}: evaluating {len(grid)} cells × {episodes} episodes", flush=True)
+        res = evaluate_cells(entry.policy, grid, episodes, seed, policy_kwargs=entry.policy_kwargs(),
+                             progress=progress, label=entry.label)
+        save(res, path, os.path.join(out_dir, f"{entry.slug}.md"),
+             {"fingerprint": fp, "label": entry.label, "group": entry.group, "episodes": episodes, "seed": seed})
+        board[entry.label] = res
+    groups = {e.label: e.group for e in entries}
+    write_text(os.path.join(out_dir, "LEADERBOARD.md"), leaderboard_markdown(board, groups, episodes, seed))
+    return board
+
+
+TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
+                "II": "Table II — crowd size (circle crossing, non-responsive ρ = 0)",
+                "III": "Table III — unseen layouts (N = 30; trained on circle crossing only)"}
+
+
+def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[str, str] | None = None,
+                         episodes: int | None = None, seed: int | None = None) -> str:
+    """The paper's tables with one row per method: success / collision / timeout [%], navigation time [s] per
+    setting; the best success of each setting in bold. Ablation entries get their own tables."""
+    groups = groups or {}
+    out = ["# crowdbench leaderboard", ""]
+    if episodes is not None:
+        out += [f"{episodes} episodes per cell, evaluation seed {seed} (episode k ↔ world seed {seed} + k: every "
+                "method meets the same crowds). Cells: success r_s / collision r_c / timeout r_t [%], navigation "
+                "time t_s [s] of successful episodes. Regenerate with `crowdbench leaderboard`; per-method files "
+                "hold path length and Δv too.", ""]
+    for group in ("main", "ablation"):
+        labels = [lb for lb in board if groups.get(lb, "main") == group]
+        if not labels:
+            continue
+        if group == "ablation":
+            out += ["## Ablations", ""]
+        for table in ("I", "II", "III"):
+            settings = []
+            for lb in labels:
+                for r in board[lb]:
+                    if r["table"] == table and r["row"] not in settings:
+                        settings.append(r["row"])
+            if not settings:
+                continue
+            best = {s: max(r["success_rate"] for lb in labels for r in board[lb]
+                           if r["table"] == table and r["row"] == s) for s in settings}
+            out += [f"### {TABLE_TITLES[table]}", "", "| method | " + " | ".join(settings) + " |",
+                    "|---|" + "---|" * len(settings)]
+            for lb in labels:
+                by_row = {r["row"]: r for r in board[lb] if r["table"] == table}
+                cellsx = []
+                for s in settings:
+                    r = by_row.get(s)
+                    if r is None:
+                        cellsx.append("—")
+                        continue
+                    succ = f"{100 * r['success_rate']:.1f}"
+                    if r["success_rate"] == best[s]:
+                        succ = f"**{succ}**"
+                    cellsx.append(f"{succ} / {100 * r['collision_rate']:.1f} / {100 * r['timeout_rate']:.1f} · "
+                                  f"{r['nav_time']:.1f} s")
+                out.append(f"| {lb} | " + " | ".join(cellsx) + " |")
+            out.append("")
+    return "\n".join(out)

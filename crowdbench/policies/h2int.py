@@ -15,9 +15,11 @@ from tensordict import TensorDict
 
 from crowdbench.config import WorldConfig
 from crowdbench.policies.base import RobotPolicy, register
-from crowdbench.policies.h2int_net import H2INTActor
+from crowdbench.policies.h2int_net import H2INTActor, H2INTExport
 
 FORMAT = "crowdbench.h2int/1"
+SCRIPT_BELOW = 64
+"""Batches smaller than this run through TorchScript (per-call overhead), larger ones through the eager encoder."""
 DEFAULT_CHECKPOINT = os.path.normpath(os.path.join(os.path.dirname(__file__), "..", "..", "leaderboards", "checkpoints",
                                                   "h2int.pt"))
 """The shipped checkpoint (present in a source checkout / editable install)."""
@@ -69,6 +71,18 @@ class H2INTPolicy(RobotPolicy):
                              f"with N_max={n_max}")
         self.actor = actor.eval()
         self.hidden: torch.Tensor | None = None
+        self._script: torch.jit.ScriptModule | None = None
+
+    def _scripted(self) -> torch.jit.ScriptModule:
+        """The frozen TorchScript module used for small batches (one robot: ~3× less per-call overhead than eager
+        PyTorch; same outputs to 1e-5). Batches of 64+ worlds use the eager, bucketed encoder."""
+        if self._script is None:
+            import warnings
+
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", DeprecationWarning)  # torch.jit is deprecated but still the fastest
+                self._script = torch.jit.freeze(torch.jit.script(H2INTExport(self.actor, trim=True).eval()))
+        return self._script
 
     @torch.inference_mode()
     def reset(self, done: np.ndarray | None = None) -> None:
@@ -81,10 +95,13 @@ class H2INTPolicy(RobotPolicy):
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         robot = torch.as_tensor(obs["robot"], dtype=torch.float32)
         edges = torch.as_tensor(obs["humans"], dtype=torch.float32)
-        valid = torch.as_tensor(obs["mask"]) > 0.5
-        z = self.actor.bucketed(robot, edges, valid)
+        mask = torch.as_tensor(obs["mask"], dtype=torch.float32)
         if self.hidden is None or self.hidden.shape[1] != len(robot):
             self.hidden = torch.zeros(1, len(robot), self.actor.rnn.rnn.hidden_size)
+        if len(robot) < SCRIPT_BELOW:
+            mean, self.hidden = self._scripted()(robot, edges, mask, self.hidden)
+            return mean.numpy().astype(np.float64)
+        z = self.actor.bucketed(robot, edges, mask > 0.5)
         out, self.hidden = self.actor.rnn.rnn(z.unsqueeze(0), self.hidden)
         mean = self.actor.mlp(out.squeeze(0))
         return mean.numpy().astype(np.float64)

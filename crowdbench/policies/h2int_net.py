@@ -180,7 +180,8 @@ class H2INTActor(MLPModel):
         def encode(idx: torch.Tensor) -> torch.Tensor:
             return torch.cat([self.encoder(robot[i], edges[i], valid[i], trim=True) for i in idx.chunk(buckets)])
 
-        if self.threads > 1 and robot.shape[0] >= 64 * self.threads:
+        # inference batches below ~1000 samples are faster on one thread (hand-off costs more than it saves)
+        if self.threads > 1 and robot.shape[0] >= (64 * self.threads if torch.is_grad_enabled() else 1024):
             shares = [order[k:: self.threads] for k in range(self.threads)]
             return parallel_map(self.encoder, encode, shares, robot.shape[0])
         out = robot.new_empty((robot.shape[0], self.encoder.final_ln.normalized_shape[0]))
@@ -282,10 +283,13 @@ class H2INTExport(nn.Module):
     """Deterministic recurrent policy for TorchScript/ONNX: ``(robot (B, 9), humans (B, N, 2), mask (B, N),
     h_in (1, B, H)) → (action (B, 2), h_out (1, B, H))``."""
 
-    def __init__(self, actor: H2INTActor) -> None:
+    def __init__(self, actor: H2INTActor, trim: bool = False) -> None:
+        """``trim=True`` skips token columns invalid for the whole batch (data-dependent shapes: for TorchScript
+        inference, not for ONNX export)."""
         super().__init__()
         import copy
 
+        self.trim = trim
         self.encoder = copy.deepcopy(actor.encoder)
         self.gru = copy.deepcopy(actor.rnn.rnn)
         self.mlp = copy.deepcopy(actor.mlp)
@@ -293,7 +297,7 @@ class H2INTExport(nn.Module):
         self.n_max = int(actor.encoder.pos_emb.num_embeddings - 1)
 
     def forward(self, robot: torch.Tensor, humans: torch.Tensor, mask: torch.Tensor, h_in: torch.Tensor):
-        z = self.encoder(robot, humans, mask > 0.5)
+        z = self.encoder(robot, humans, mask > 0.5, self.trim)
         out, h_out = self.gru(z.unsqueeze(0), h_in)
         return self.mlp(out.squeeze(0)), h_out
 
