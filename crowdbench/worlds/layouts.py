@@ -12,6 +12,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from typing import ClassVar
 
+import numba as nb
 import numpy as np
 
 from crowdbench.geometry import Polygon, obstacle_edges, point_segment_distance
@@ -87,6 +88,20 @@ def _inside_polygons(points: np.ndarray, obstacles: Sequence[Polygon]) -> np.nda
     return inside
 
 
+@nb.njit(cache=True)
+def _clear(pts: np.ndarray, others: np.ndarray, dmin: float, ok: np.ndarray) -> None:
+    """``ok[c] &= |pts[c] − others[j]| ≥ dmin`` for every j (the same float operations as ``np.linalg.norm``)."""
+    for c in range(pts.shape[0]):
+        if not ok[c]:
+            continue
+        for j in range(others.shape[0]):
+            dx = pts[c, 0] - others[j, 0]
+            dy = pts[c, 1] - others[j, 1]
+            if not np.sqrt(dx * dx + dy * dy) >= dmin:
+                ok[c] = False
+                break
+
+
 def place_without_overlap(
     layout: Layout,
     rng: np.random.Generator,
@@ -113,11 +128,12 @@ def place_without_overlap(
     for i in range(n):
         for _ in range(rounds):
             s, g = layout.candidates(rng, i, n, pool)
-            ok = np.ones(pool, dtype=bool)
+            s, g = np.ascontiguousarray(s, dtype=np.float64), np.ascontiguousarray(g, dtype=np.float64)
+            ok = np.ones(len(s), dtype=bool)
             for pts, acc, separate in ((s, starts[:i], True), (g, goals[:i], layout.separate_goals)):
-                ok &= (np.linalg.norm(pts[:, None] - robot_pts[None], axis=-1) >= d_hr).all(axis=1)
+                _clear(pts, robot_pts, d_hr, ok)
                 if i and separate:
-                    ok &= (np.linalg.norm(pts[:, None] - acc[None], axis=-1) >= d_hh).all(axis=1)
+                    _clear(pts, acc, d_hh, ok)
             if len(edges):
                 for pts in (s, g):
                     clear = point_segment_distance(pts[:, None], edges[None, :, 0], edges[None, :, 1])
