@@ -1,20 +1,20 @@
-"""A batch of crowd worlds split into shards stepped in parallel processes.
+"""A batch of crowd worlds split into shards, stepped in this process or in worker processes.
 
-One shard is stepped in the calling process, every other one in a worker process (``multiprocessing``, fork where
-the platform has it); a step sends each worker its slice of the actions, steps the local shard meanwhile, then
-gathers. Worlds are independent and every episode's randomness comes from its own seed, so a sharded batch produces
-exactly the same numbers as an unsharded one (tested) — sharding is a speed setting, not a modelling choice.
+Every world draws its episode seeds from its own stream (``np.random.SeedSequence(seed).spawn(num_worlds)``), and a
+shard resets its finished worlds itself, right after the step that finished them (same-step auto-reset) — one round
+trip per step, and the numbers do not depend on how the batch is split: any sharding gives exactly the same
+rollouts for the same actions (tested).
 
-Workers build their worlds from the registries as seen at fork time; with the ``spawn`` start method (platforms
-without fork) a pedestrian model registered at run time in ``__main__`` is not visible to them — register it through
-the ``crowdbench.humans`` entry point instead.
+Worker processes are started with ``fork`` where the platform has it, so pedestrian models registered at run time are
+visible to them; with ``spawn`` (platforms without fork) register models through the ``crowdbench.humans`` entry
+point instead.
 """
 
 from __future__ import annotations
 
 import multiprocessing as mp
 import traceback
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -27,7 +27,7 @@ from crowdbench.worlds.world import CrowdWorld
 
 @dataclass
 class ShardSpec:
-    """What a worker needs to build its shard."""
+    """What a shard needs to build its worlds."""
 
     config: WorldConfig
     num_worlds: int
@@ -37,43 +37,75 @@ class ShardSpec:
     observation: str = "relative"
 
 
-class Shard:
-    """``num_worlds`` worlds and their robot-observation builder."""
+@dataclass
+class StepOut:
+    """One shard's (or the whole batch's) step: arrays with the worlds as leading dimension."""
 
-    def __init__(self, spec: ShardSpec) -> None:
+    reward: np.ndarray
+    terminated: np.ndarray
+    truncated: np.ndarray
+    outcome: np.ndarray
+    obs: dict[str, np.ndarray]
+    """Observations after the same-step resets."""
+    steps: np.ndarray
+    """Episode step counters after the same-step resets."""
+
+
+class Shard:
+    """Some worlds, their seed streams and their robot-observation builder."""
+
+    def __init__(self, spec: ShardSpec, streams: list[np.random.SeedSequence]) -> None:
         self.world = CrowdWorld(spec.config, spec.num_worlds, spec.layout, spec.human_model,
                                 spec.human_model_kwargs)
         self.obs_builder = make_observation(spec.observation, spec.config)
+        self.streams = [np.random.default_rng(s) for s in streams]
 
-    def step(self, actions: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, ...]:
-        """``actions`` ``(n, 2)``, episode step counters ``(n,)`` → reward, terminated, truncated, outcome ``(n,)``."""
-        self.world.steps[:] = steps
-        res = self.world.step(actions)
-        return res.reward, res.terminated, res.truncated, res.outcome
-
-    def reset(self, seeds: list[int], mask: np.ndarray | None, rho: float | None) -> None:
-        """New episodes in the worlds ``mask`` (all if None) with these seeds; ``rho`` sets the crowd's mean
-        responsiveness first (for models that have one)."""
+    def _set_rho(self, rho: float | None) -> None:
         model = self.world.human_model
         if rho is not None and hasattr(model, "set_responsiveness"):
             model.set_responsiveness(rho)
+
+    def _reset(self, mask: np.ndarray | None) -> None:
+        idx = range(self.world.num_worlds) if mask is None else np.flatnonzero(mask)
+        seeds = [int(self.streams[i].integers(0, 2**63 - 1)) for i in idx]
         if seeds:
             self.world.reset(seeds=seeds, mask=mask)
+
+    def reset_all(self, rho: float | None) -> StepOut:
+        """New episodes everywhere (next seed of each world's stream; ``rho`` = the crowd's mean responsiveness for
+        models that have one)."""
+        self._set_rho(rho)
+        self._reset(None)
+        n = self.world.num_worlds
+        z = np.zeros(n, dtype=bool)
+        return StepOut(np.zeros(n), z, z, np.zeros(n, dtype=np.int64), *self.observe())
+
+    def step(self, actions: np.ndarray, steps: np.ndarray, rho: float | None) -> StepOut:
+        """Step with ``actions`` ``(n, 2)`` and episode step counters ``steps`` ``(n,)``; finished worlds restart
+        (with mean responsiveness ``rho``) before the observations are taken."""
+        self.world.steps[:] = steps
+        res = self.world.step(actions)
+        done = res.terminated | res.truncated
+        if done.any():
+            self._set_rho(rho)
+            self._reset(done)
+        return StepOut(res.reward, res.terminated, res.truncated, res.outcome, *self.observe())
 
     def observe(self) -> tuple[dict[str, np.ndarray], np.ndarray]:
         """Robot observations and the episode step counters."""
         return self.obs_builder.build(self.world), self.world.steps.copy()
 
-    def reset_observe(self, seeds: list[int], mask: np.ndarray | None,
-                      rho: float | None) -> tuple[dict[str, np.ndarray], np.ndarray]:
-        """:meth:`reset` then :meth:`observe` (one round trip for a worker)."""
-        self.reset(seeds, mask, rho)
-        return self.observe()
+    def get_streams(self) -> list[dict]:
+        return [g.bit_generator.state for g in self.streams]
+
+    def set_streams(self, states: list[dict]) -> None:
+        for g, s in zip(self.streams, states, strict=True):
+            g.bit_generator.state = s
 
 
-def _worker(conn: Connection, spec: ShardSpec) -> None:
+def _worker(conn: Connection, spec: ShardSpec, streams: list[np.random.SeedSequence]) -> None:
     try:
-        shard = Shard(spec)
+        shard = Shard(spec, streams)
         conn.send(("ok", None))
     except Exception:  # noqa: BLE001 - reported to the parent
         conn.send(("error", traceback.format_exc()))
@@ -92,33 +124,45 @@ def _worker(conn: Connection, spec: ShardSpec) -> None:
 
 
 class ShardedWorlds:
-    """``num_worlds`` worlds in ``processes`` shards (contiguous slices; shard 0 in this process)."""
+    """``spec.num_worlds`` worlds in ``shards`` contiguous slices.
 
-    def __init__(self, spec: ShardSpec, processes: int = 1) -> None:
-        if not 1 <= processes <= spec.num_worlds:
-            raise ValueError(f"processes={processes}; valid choices: 1 … num_worlds ({spec.num_worlds})")
+    Args:
+        spec: What every shard builds (``num_worlds`` is the total).
+        seed: Master seed of the per-world episode-seed streams.
+        shards: Number of slices.
+        local: Step the first slice in this process (the others in worker processes); ``False`` puts every slice in
+            a worker, so that this process is free while they step (see :meth:`send_step`).
+    """
+
+    def __init__(self, spec: ShardSpec, seed: int = 0, shards: int = 1, local: bool = True) -> None:
+        if not 1 <= shards <= spec.num_worlds:
+            raise ValueError(f"shards={shards}; valid choices: 1 … num_worlds ({spec.num_worlds})")
         self.num_worlds = spec.num_worlds
-        sizes = [len(a) for a in np.array_split(np.arange(spec.num_worlds), processes)]
+        sizes = [len(a) for a in np.array_split(np.arange(spec.num_worlds), shards)]
         self.bounds = np.cumsum([0, *sizes])
-        self.local = Shard(ShardSpec(**{**spec.__dict__, "num_worlds": sizes[0]}))
-        methods = mp.get_all_start_methods()
-        ctx = mp.get_context("fork" if "fork" in methods else "spawn")
-        self.conns: list[Connection] = []
+        self.slices = [slice(int(a), int(b)) for a, b in zip(self.bounds[:-1], self.bounds[1:], strict=True)]
+        streams = np.random.SeedSequence(seed).spawn(spec.num_worlds)
+        self.local = Shard(replace(spec, num_worlds=sizes[0]), streams[self.slices[0]]) if local else None
+        ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+        self.conns: list[Connection | None] = [None] if local else []
         self.procs: list[Any] = []
-        for n in sizes[1:]:
+        for k in range(1 if local else 0, shards):
             parent, child = ctx.Pipe()
-            p = ctx.Process(target=_worker, args=(child, ShardSpec(**{**spec.__dict__, "num_worlds": n})),
-                            daemon=True, name="crowdbench-shard")
+            p = ctx.Process(target=_worker, args=(child, replace(spec, num_worlds=sizes[k]), streams[self.slices[k]]),
+                            daemon=True, name=f"crowdbench-shard-{k}")
             p.start()
             child.close()
             self.conns.append(parent)
             self.procs.append(p)
         for c in self.conns:
-            self._recv(c)
+            if c is not None:
+                self._recv(c)
 
     @property
     def world(self) -> CrowdWorld:
-        """The local shard's worlds (all of them when ``processes == 1``)."""
+        """The in-process shard's worlds (all of them with one local shard)."""
+        if self.local is None:
+            raise AttributeError("every shard runs in a worker process")
         return self.local.world
 
     @staticmethod
@@ -128,44 +172,53 @@ class ShardedWorlds:
             raise RuntimeError(f"crowd-world worker failed:\n{value}")
         return value
 
-    def _slices(self) -> list[slice]:
-        return [slice(int(a), int(b)) for a, b in zip(self.bounds[:-1], self.bounds[1:], strict=True)]
-
-    def call(self, method: str, per_shard_args: list[tuple]) -> list[Any]:
-        """Run ``Shard.method`` on every shard in parallel; results in shard order."""
-        for conn, args in zip(self.conns, per_shard_args[1:], strict=True):
+    # ------------------------------------------------------------------ per shard
+    def send(self, k: int, method: str, *args: Any) -> None:
+        """Start ``Shard.method(*args)`` on shard ``k`` (runs at once, to completion, for the local shard)."""
+        conn = self.conns[k]
+        if conn is None:
+            self._local_result = getattr(self.local, method)(*args)
+        else:
             conn.send((method, args))
-        first = getattr(self.local, method)(*per_shard_args[0])
-        return [first, *(self._recv(c) for c in self.conns)]
 
-    def step(self, actions: np.ndarray, steps: np.ndarray) -> tuple[np.ndarray, ...]:
-        """All worlds: ``actions`` ``(B, 2)``, step counters ``(B,)`` → reward, terminated, truncated, outcome."""
-        parts = self.call("step", [(actions[s], steps[s]) for s in self._slices()])
-        return tuple(np.concatenate(x) for x in zip(*parts, strict=True))
+    def wait(self, k: int) -> Any:
+        """The result of the call last sent to shard ``k``."""
+        conn = self.conns[k]
+        if conn is None:
+            out, self._local_result = self._local_result, None
+            return out
+        return self._recv(conn)
 
-    def reset(self, seeds: list[int], mask: np.ndarray | None,
-              rho: float | None) -> tuple[dict[str, np.ndarray], np.ndarray]:
-        """New episodes in the worlds ``mask`` (all if None), seeds in world order; returns :meth:`observe`."""
-        args, used = [], 0
-        for s in self._slices():
-            m = None if mask is None else mask[s]
-            k = (s.stop - s.start) if m is None else int(m.sum())
-            args.append((seeds[used:used + k], m, rho))
-            used += k
-        return self._gather(self.call("reset_observe", args))
+    def send_step(self, k: int, actions: np.ndarray, steps: np.ndarray, rho: float | None) -> None:
+        """Start stepping shard ``k`` (its slice of ``actions`` ``(n_k, 2)`` and ``steps`` ``(n_k,)``)."""
+        self.send(k, "step", actions, steps, rho)
 
-    def observe(self) -> tuple[dict[str, np.ndarray], np.ndarray]:
-        """Robot observations ``{group: (B, …)}`` and episode step counters ``(B,)``."""
-        return self._gather(self.call("observe", [()] * len(self._slices())))
+    # ------------------------------------------------------------------ whole batch
+    def call(self, method: str, per_shard_args: list[tuple]) -> list[Any]:
+        """``Shard.method`` on every shard, in parallel; results in shard order."""
+        order = sorted(range(len(self.slices)), key=lambda k: self.conns[k] is None)  # workers first
+        for k in order:
+            self.send(k, method, *per_shard_args[k])
+        return [self.wait(k) for k in range(len(self.slices))]
 
-    @staticmethod
-    def _gather(parts: list) -> tuple[dict[str, np.ndarray], np.ndarray]:
-        obs = {k: np.concatenate([p[0][k] for p in parts]) for k in parts[0][0]}
-        return obs, np.concatenate([p[1] for p in parts])
+    def step(self, actions: np.ndarray, steps: np.ndarray, rho: float | None) -> StepOut:
+        """Every world: ``actions`` ``(B, 2)``, step counters ``(B,)`` → the concatenated :class:`StepOut`."""
+        return concat(self.call("step", [(actions[s], steps[s], rho) for s in self.slices]))
+
+    def reset_all(self, rho: float | None) -> StepOut:
+        return concat(self.call("reset_all", [(rho,)] * len(self.slices)))
+
+    def get_streams(self) -> list[dict]:
+        return [s for part in self.call("get_streams", [()] * len(self.slices)) for s in part]
+
+    def set_streams(self, states: list[dict]) -> None:
+        self.call("set_streams", [(states[s],) for s in self.slices])
 
     def close(self) -> None:
         """Stop the worker processes (idempotent)."""
         for c in getattr(self, "conns", []):
+            if c is None:
+                continue
             try:
                 c.send(("close", None))
                 c.close()
@@ -179,3 +232,11 @@ class ShardedWorlds:
 
     def __del__(self) -> None:
         self.close()
+
+
+def concat(parts: list[StepOut]) -> StepOut:
+    """Shards' :class:`StepOut` joined along the world axis."""
+    return StepOut(*(np.concatenate([getattr(p, f) for p in parts]) for f in ("reward", "terminated", "truncated",
+                                                                             "outcome")),
+                   {k: np.concatenate([p.obs[k] for p in parts]) for k in parts[0].obs},
+                   np.concatenate([p.steps for p in parts]))

@@ -24,6 +24,7 @@ from rsl_rl.runners import OnPolicyRunner
 from crowdbench.io import atomic_path, write_text
 from crowdbench.policies.h2int import FORMAT, H2INTPolicy, build_actor, load_checkpoint
 from crowdbench.policies.h2int_net import VARIANTS, H2INTActor, H2INTCritic, SharedTrunkPPO
+from crowdbench.training.rollout import collect
 from crowdbench.training.vecenv import CrowdVecEnv, Curriculum
 
 
@@ -75,8 +76,9 @@ class TrainConfig:
     (:mod:`crowdbench.policies.parallel`). Deterministic for a given count; other counts differ in the last bits of
     the gradient sums."""
     env_processes: int = 2
-    """Processes stepping the worlds (:mod:`crowdbench.training.shards`): a speed setting only — results are
-    identical for any value."""
+    """1: the worlds step in the training process. k ≥ 2: k worker processes step k groups of worlds while this
+    process computes the next group's actions (:mod:`crowdbench.training.rollout`) — the same transitions, computed in
+    another order (the network's batches differ, so results differ from ``1`` in the last bits)."""
     checkpoint_every: int = 20
     eval_every: int = 20
     """Iterations between quick deterministic evaluations (circle crossing, 20 pedestrians, ρ = 0.5)."""
@@ -219,13 +221,8 @@ class Trainer:
         start_elapsed, t_start = self.elapsed, time.time()
         while self.iteration < cfg.iterations:
             t0 = time.time()
-            rewards = []
             with torch.inference_mode():
-                for _ in range(cfg.steps_per_env):
-                    actions = alg.act(obs)
-                    obs, rew, dones, extras = env.step(actions)
-                    alg.process_env_step(obs, rew, dones, extras)
-                    rewards.append(float(rew.mean()))
+                obs, extras, rewards = collect(alg, env, obs, cfg.steps_per_env)
                 alg.compute_returns(obs)
             t1 = time.time()
             losses = alg.update()

@@ -17,7 +17,7 @@ from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
 from crowdbench.config import make_config
-from crowdbench.training.shards import ShardedWorlds, ShardSpec
+from crowdbench.training.shards import ShardedWorlds, ShardSpec, StepOut
 from crowdbench.worlds.world import COLLISION, SUCCESS, TIMEOUT
 
 
@@ -42,17 +42,21 @@ class Curriculum:
         self.changes: list[tuple[int, float]] = []
 
     def record(self, successes: np.ndarray, episodes_total: int) -> bool:
-        """Add finished episodes' outcomes; returns True when ρ was lowered."""
-        self.recent.extend(bool(s) for s in successes)
-        self.since_change += len(successes)
-        if (self.enabled and self.rho > self.rho_min + 1e-9 and len(self.recent) == self.window
-                and self.since_change >= self.cooldown and np.mean(self.recent) >= self.eta):
-            self.rho = round(max(self.rho - self.delta, self.rho_min), 10)
-            self.recent.clear()
-            self.since_change = 0
-            self.changes.append((episodes_total, self.rho))
-            return True
-        return False
+        """Add finished episodes' outcomes (``episodes_total`` counts them too); returns True when ρ was lowered.
+        Outcomes are taken one at a time, in order, so the schedule does not depend on how they are batched."""
+        first = episodes_total - len(successes)
+        lowered = False
+        for i, s in enumerate(successes):
+            self.recent.append(bool(s))
+            self.since_change += 1
+            if (self.enabled and self.rho > self.rho_min + 1e-9 and len(self.recent) == self.window
+                    and self.since_change >= self.cooldown and sum(self.recent) >= self.eta * self.window):
+                self.rho = round(max(self.rho - self.delta, self.rho_min), 10)
+                self.recent.clear()
+                self.since_change = 0
+                self.changes.append((first + i + 1, self.rho))
+                lowered = True
+        return lowered
 
     def state_dict(self) -> dict[str, Any]:
         d = asdict(self)
@@ -71,11 +75,14 @@ class CrowdVecEnv(VecEnv):
 
     Args:
         num_envs: Worlds stepped together.
-        seed: Master seed; episode seeds are drawn from ``np.random.default_rng(seed)``, in world order.
-        curriculum: Responsiveness schedule (its ρ is applied at every episode start).
+        seed: Master seed; world ``w`` draws its episode seeds from stream ``w`` of
+            ``np.random.SeedSequence(seed).spawn(num_envs)``.
+        curriculum: Responsiveness schedule; its current ρ applies to every episode that starts.
         reward_scale: Multiplies the rewards handed to PPO (outcomes and metrics are unaffected).
-        processes: Processes stepping the worlds (:class:`~crowdbench.training.shards.ShardedWorlds`; the same
-            numbers for any value). Call :meth:`close` when done with more than one.
+        processes: 1 steps every world in this process; ``k ≥ 2`` splits them into ``k`` groups, each stepped by a
+            worker process (:class:`~crowdbench.training.shards.ShardedWorlds`), in parallel by :meth:`step`, or
+            group by group with :meth:`step_async` / :meth:`step_wait` so that the caller can compute one group's
+            actions while others step. The same numbers for any value. Call :meth:`close` when done.
         layout, human_model, human_model_kwargs: As for :class:`~crowdbench.worlds.CrowdWorld`.
         **world_options: :class:`~crowdbench.config.WorldConfig` fields (e.g. ``humans_range=(10, 30)``).
     """
@@ -84,70 +91,98 @@ class CrowdVecEnv(VecEnv):
                  layout: str = "circle_crossing", human_model: str = "responsive_orca",
                  human_model_kwargs: dict | None = None, reward_scale: float = 1.0, processes: int = 1,
                  **world_options: Any) -> None:
+        if processes < 1:
+            raise ValueError(f"processes={processes}; valid choices: 1 (this process) or ≥ 2 (worker processes)")
         self.reward_scale = reward_scale
         self.curriculum = curriculum or Curriculum(enabled=False)
         kwargs = {"responsiveness": self.curriculum.rho, **(human_model_kwargs or {})}
         self.config = make_config(**world_options)
-        self.worlds = ShardedWorlds(ShardSpec(self.config, num_envs, layout, human_model, kwargs), processes)
+        self.worlds = ShardedWorlds(ShardSpec(self.config, num_envs, layout, human_model, kwargs), seed, processes,
+                                    local=processes == 1)
+        self.groups = self.worlds.slices
+        """The world slices stepped by each process (one slice when ``processes == 1``)."""
         self.num_envs = num_envs
         self.num_actions = 2
         self.max_episode_length = self.config.max_steps
         self.device = "cpu"
         self.cfg = {"layout": layout, "human_model": human_model, "seed": seed, **world_options}
-        self.master = np.random.default_rng(seed)
         self.episode_length_buf = torch.zeros(num_envs, dtype=torch.long)
         self.episodes = 0
         self.totals = np.zeros(4, dtype=np.int64)  # outcome counts
         self.window_outcomes: deque[int] = deque(maxlen=self.curriculum.window)
+        self._obs: list[dict[str, np.ndarray]] = [{} for _ in self.groups]
         self.reset_all()
 
-    def _seeds(self, k: int) -> list[int]:
-        return [int(s) for s in self.master.integers(0, 2**63 - 1, k)]
-
     def reset_all(self) -> None:
-        """Start fresh episodes in every world (seeds from the master generator)."""
-        self._set_obs(*self.worlds.reset(self._seeds(self.num_envs), None, self.curriculum.rho))
-
-    def _set_obs(self, obs: dict[str, np.ndarray], steps: np.ndarray) -> None:
-        self._obs = TensorDict({k: torch.from_numpy(v) for k, v in obs.items()}, batch_size=[self.num_envs])
-        self.episode_length_buf = torch.from_numpy(steps)
+        """Start fresh episodes in every world (next seed of each world's stream)."""
+        out = self.worlds.reset_all(self.curriculum.rho)
+        for k, sl in enumerate(self.groups):
+            self._obs[k] = {key: v[sl] for key, v in out.obs.items()}
+        self.episode_length_buf = torch.from_numpy(out.steps)
 
     def get_observations(self) -> TensorDict:
-        return self._obs
+        """Current observations of every world (a new TensorDict each call: rollouts keep references)."""
+        obs = {k: torch.from_numpy(np.concatenate([o[k] for o in self._obs])) for k in self._obs[0]}
+        return TensorDict(obs, batch_size=[self.num_envs])
 
-    def step(self, actions: torch.Tensor):
-        reward, terminated, truncated, outcome = self.worlds.step(
-            actions.detach().cpu().numpy().astype(np.float64), self.episode_length_buf.numpy())
-        done = terminated | truncated
-        log: dict[str, float] = {"rho": self.curriculum.rho}
-        seeds: list[int] = []
+    def _finish(self, k: int | None, out: StepOut) -> tuple[TensorDict, torch.Tensor, torch.Tensor, dict]:
+        """Book-keeping of a finished step of group ``k`` (None: every world); rsl-rl's step tuple for it."""
+        sl = slice(None) if k is None else self.groups[k]
+        done = out.terminated | out.truncated
         if done.any():
-            outcomes = outcome[done]
+            outcomes = out.outcome[done]
             self.episodes += len(outcomes)
             self.totals += np.bincount(outcomes, minlength=4)
             self.window_outcomes.extend(int(o) for o in outcomes)
             self.curriculum.record(outcomes == SUCCESS, self.episodes)
-            seeds = self._seeds(int(done.sum()))
-        self._set_obs(*self.worlds.reset(seeds, done, self.curriculum.rho))
+        if k is None:
+            for j, g in enumerate(self.groups):
+                self._obs[j] = {key: v[g] for key, v in out.obs.items()}
+        else:
+            self._obs[k] = out.obs
+        self.episode_length_buf[sl] = torch.from_numpy(out.steps)
+        extras = {"time_outs": torch.from_numpy(out.truncated), "log": self.log()}
+        rewards = torch.from_numpy((out.reward * self.reward_scale).astype(np.float32))
+        obs = TensorDict({key: torch.from_numpy(v) for key, v in out.obs.items()}, batch_size=[len(done)])
+        return obs, rewards, torch.from_numpy(done), extras
+
+    def log(self) -> dict[str, float]:
+        """Outcome rates over the last ``window`` episodes and the current ρ."""
         w = np.asarray(self.window_outcomes) if self.window_outcomes else np.zeros(1, dtype=int) - 1
-        log.update(success_rate=float(np.mean(w == SUCCESS)), collision_rate=float(np.mean(w == COLLISION)),
-                   timeout_rate=float(np.mean(w == TIMEOUT)))
-        extras = {"time_outs": torch.from_numpy(truncated), "log": {f"Crowd/{k}": v for k, v in log.items()}}
-        rewards = torch.from_numpy((reward * self.reward_scale).astype(np.float32))
-        return self.get_observations(), rewards, torch.from_numpy(done), extras
+        return {"Crowd/rho": self.curriculum.rho, "Crowd/success_rate": float(np.mean(w == SUCCESS)),
+                "Crowd/collision_rate": float(np.mean(w == COLLISION)),
+                "Crowd/timeout_rate": float(np.mean(w == TIMEOUT))}
+
+    def step(self, actions: torch.Tensor):
+        """Step every world (same-step auto-reset); rsl-rl's ``(obs, rewards, dones, extras)``."""
+        out = self.worlds.step(actions.detach().cpu().numpy().astype(np.float64), self.episode_length_buf.numpy(),
+                               self.curriculum.rho)
+        return self._finish(None, out)
+
+    def step_async(self, k: int, actions: torch.Tensor) -> None:
+        """Start stepping group ``k`` with its actions ``(n_k, 2)``."""
+        self.worlds.send_step(k, actions.detach().cpu().numpy().astype(np.float64),
+                              self.episode_length_buf[self.groups[k]].numpy(), self.curriculum.rho)
+
+    def step_wait(self, k: int):
+        """Finish group ``k``'s step: ``(obs, rewards, dones, extras)`` of its worlds."""
+        return self._finish(k, self.worlds.wait(k))
 
     def close(self) -> None:
         """Stop the worker processes (if any)."""
         self.worlds.close()
 
     def state_dict(self) -> dict[str, Any]:
-        """Curriculum, outcome statistics and the master generator (worlds restart at a checkpoint)."""
-        return {"curriculum": self.curriculum.state_dict(), "master": self.master.bit_generator.state,
+        """Curriculum, outcome statistics and every world's seed stream (worlds restart at a checkpoint)."""
+        return {"curriculum": self.curriculum.state_dict(), "streams": self.worlds.get_streams(),
                 "episodes": self.episodes, "totals": self.totals.tolist(), "window": list(self.window_outcomes)}
 
     def load_state_dict(self, d: dict[str, Any]) -> None:
+        if "streams" not in d:
+            raise ValueError("this checkpoint comes from an older crowdbench (one master seed stream) and cannot be "
+                             "resumed exactly; start a new run")
         self.curriculum.load_state_dict(d["curriculum"])
-        self.master.bit_generator.state = d["master"]
+        self.worlds.set_streams(d["streams"])
         self.episodes = int(d["episodes"])
         self.totals = np.asarray(d["totals"], dtype=np.int64)
         self.window_outcomes = deque((int(x) for x in d["window"]), maxlen=self.curriculum.window)

@@ -9,45 +9,101 @@ from tensordict import TensorDict
 
 from crowdbench.config import make_config
 from crowdbench.policies.h2int_net import VARIANTS, H2INTActor, H2INTEncoder
+from crowdbench.training.rollout import collect
 from crowdbench.training.shards import ShardedWorlds, ShardSpec
 from crowdbench.training.vecenv import CrowdVecEnv, Curriculum
 
 
-def _rollout(processes: int, steps: int = 150) -> tuple[list, float, int]:
+def _rollout(processes: int, steps: int = 150, pipelined: bool = False) -> tuple[list, float, int]:
     env = CrowdVecEnv(24, seed=3, processes=processes, humans_range=(10, 30),
-                      curriculum=Curriculum(window=20, cooldown=20))
+                      curriculum=Curriculum(window=20, cooldown=20, eta=2.0))  # records outcomes, never lowers ρ
     g = torch.Generator().manual_seed(0)
     out = []
     try:
         for _ in range(steps):
-            obs, rew, done, extras = env.step(torch.randn(24, 2, generator=g))
+            actions = torch.randn(24, 2, generator=g)
+            if pipelined:  # group by group, as the pipelined collector does
+                parts = []
+                for k, sl in enumerate(env.groups):
+                    env.step_async(k, actions[sl])
+                    parts.append(env.step_wait(k))
+                obs = torch.cat([p[0] for p in parts], 0)
+                rew, done = torch.cat([p[1] for p in parts]), torch.cat([p[2] for p in parts])
+                time_outs = torch.cat([p[3]["time_outs"] for p in parts])
+            else:
+                obs, rew, done, extras = env.step(actions)
+                time_outs = extras["time_outs"]
+            full = env.get_observations()
+            assert all(torch.equal(full[k], obs[k]) for k in ("robot", "humans", "mask"))
             out.append((obs["robot"].clone(), obs["humans"].clone(), obs["mask"].clone(), rew.clone(), done.clone(),
-                        extras["time_outs"].clone(), env.episode_length_buf.clone()))
+                        time_outs.clone(), env.episode_length_buf.clone()))
     finally:
         env.close()
     return out, env.curriculum.rho, env.episodes
 
 
-def test_sharded_worlds_give_identical_rollouts():
-    one, rho1, eps1 = _rollout(1)
-    three, rho3, eps3 = _rollout(3)
-    assert eps1 == eps3 > 10  # episodes ended and restarted (auto-reset with fresh seeds) during the rollout
-    assert rho1 == rho3
-    for a, b in zip(one, three, strict=True):
+@pytest.mark.parametrize(("processes", "pipelined"), [(3, False), (2, True)])
+def test_sharded_worlds_give_identical_rollouts(processes, pipelined):
+    one, _, eps1 = _rollout(1)
+    other, _, eps2 = _rollout(processes, pipelined=pipelined)
+    assert eps1 == eps2 > 10  # episodes ended and restarted (same-step auto-reset, fresh seeds) during the rollout
+    for a, b in zip(one, other, strict=True):
         for x, y in zip(a, b, strict=True):
             assert torch.equal(x, y)
 
 
+def test_curriculum_does_not_depend_on_batching():
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    outcomes = rng.random(3000) < 0.93
+    whole, parts = Curriculum(window=50, cooldown=50), Curriculum(window=50, cooldown=50)
+    whole.record(outcomes, len(outcomes))
+    total = 0
+    for chunk in np.array_split(outcomes, 137):
+        total += len(chunk)
+        parts.record(chunk, total)
+    assert whole.changes == parts.changes and len(whole.changes) == 8 and whole.rho == 0.0
+
+
 def test_shard_worker_errors_are_reported():
     spec = ShardSpec(make_config(), 4, "circle_crossing", "responsive_orca", {"responsiveness": 0.5})
-    worlds = ShardedWorlds(spec, processes=2)
+    worlds = ShardedWorlds(spec, shards=2)
     try:
         with pytest.raises(RuntimeError, match="worker failed"):  # the worker's traceback is raised here
-            worlds.call("step", [(np.zeros((2, 2)), np.zeros(2, dtype=np.int64)), (None, None)])
+            worlds.call("step", [(np.zeros((2, 2)), np.zeros(2, dtype=np.int64), None), (None, None, None)])
     finally:
         worlds.close()
-    with pytest.raises(ValueError, match="processes"):
-        ShardedWorlds(spec, processes=5)
+    with pytest.raises(ValueError, match="shards"):
+        ShardedWorlds(spec, shards=5)
+
+
+def test_pipelined_collection_writes_the_same_transitions():
+    """The pipelined collector fills rsl-rl's storage as the synchronous alg.act/env.step loop does."""
+    from crowdbench.training.train import TrainConfig, Trainer
+
+    stores = []
+    for processes in (1, 2):
+        cfg = TrainConfig(num_envs=16, steps_per_env=60, d_model=16, heads=2, ffn=16, gru_hidden=16,
+                          head_dims=(16,), humans_range=(15, 25), eval_every=0, env_processes=processes, threads=1)
+        tr = Trainer(cfg, "/tmp/crowdbench-test-pipeline", quiet=True)
+        try:
+            torch.manual_seed(5)
+            # start the episodes late (as rsl-rl's init_at_random_ep_len does): time-outs and restarts happen
+            tr.env.episode_length_buf[:] = torch.arange(150, 198, 3)
+            with torch.inference_mode():
+                obs, _, _ = collect(tr.alg, tr.env, tr.env.get_observations(), cfg.steps_per_env)
+            st = tr.alg.storage
+            stores.append({"obs": st.observations["humans"].clone(), "actions": st.actions.clone(),
+                           "rewards": st.rewards.clone(), "dones": st.dones.clone(), "values": st.values.clone(),
+                           "logp": st.actions_log_prob.clone(), "hidden": st.saved_hidden_state_a[0].clone(),
+                           "last": obs["robot"].clone(), "h": tr.alg.actor.rnn.hidden_state.clone()})
+        finally:
+            tr.close()
+    a, b = stores
+    assert a["dones"].sum() >= 3, int(a["dones"].sum())
+    for key in a:
+        assert torch.allclose(a[key], b[key], atol=1e-5), key
 
 
 def _batch(n: int = 512, n_max: int = 30, seed: int = 0):

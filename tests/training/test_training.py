@@ -106,6 +106,6 @@ def test_curriculum_lowers_rho_only_after_window_and_cooldown():
 
 
 def test_no_anneal_trains_at_final_difficulty(tmp_path):
-    tr = train(tiny(iterations=1, anneal=False, eval_every=0), str(tmp_path / "fixed"), quiet=True)
+    tr = train(tiny(iterations=1, anneal=False, eval_every=0, env_processes=1), str(tmp_path / "fixed"), quiet=True)
     assert tr.env.curriculum.rho == 0.0 and not tr.env.curriculum.enabled
     assert tr.env.worlds.world.human_model.responsiveness == 0.0
