@@ -154,3 +154,23 @@ def test_robot_only_last_stage_equals_full_stage(variant):
     for stage in enc.stages:
         x = stage(x, tok)
     assert torch.allclose(z, enc.final_ln(x[:, 0]), atol=1e-5)
+
+
+def test_scripted_inference_follows_training_updates():
+    """Rollouts use a TorchScript copy of the encoder; it must see in-place optimiser steps and the normaliser's
+    replaced buffers, and must not add keys to checkpoints."""
+    robot, edges, valid = _batch(256)
+    obs = TensorDict({"robot": robot, "humans": edges, "mask": valid.float()}, batch_size=[len(robot)])
+    actor = H2INTActor(obs, {"actor": ["robot"]}, "actor", 2)
+    keys = set(actor.state_dict())
+    with torch.inference_mode():
+        actor.bucketed(robot, edges, valid)  # builds the scripted encoder
+    actor.encoder.robot_norm._std = actor.encoder.robot_norm._std * 2  # EmpiricalNormalization.update replaces it
+    with torch.no_grad():
+        for p in actor.encoder.parameters():
+            p.mul_(1.1)  # optimiser steps are in place
+    with torch.inference_mode():
+        scripted = actor.bucketed(robot, edges, valid)
+    eager = actor.bucketed(robot, edges, valid).detach()  # grad mode: the eager encoder
+    assert torch.allclose(scripted, eager, atol=1e-5)
+    assert set(actor.state_dict()) == keys
