@@ -6,7 +6,9 @@ Figures (medians of repeated runs, with the spread = max − min):
   + robot observation, constant robot action, one core; each repeat times 200 consecutive steps (one 50 s episode
   length, so the congested crossing phase and goal renewals are included, not just the cheap first steps);
 * ``orca_agent_steps_per_s[N]`` — the ORCA kernel alone, 64 worlds of N agents, one core;
-* ``train_steps_per_s`` — H²INT PPO training end to end (rollout + update), default configuration;
+* ``train_steps_per_s`` — H²INT PPO training end to end (rollout + update), default configuration (both cores:
+  two world processes with pipelined rollouts, two threads in the update), 10 iterations from scratch after 2 warm-up
+  iterations, evaluations off; ``train_steps_per_s_1_core`` — the same pinned to one core (one process, one thread);
 * ``h2int_inference_ms`` — one decision for one robot (encoder + GRU + head), CPU, one thread.
 
 Writes ``benchmarks/RESULTS.md`` and ``benchmarks/throughput.png`` (steps/s against N and against batch size).
@@ -119,7 +121,8 @@ def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> dic
     return _stats(samples)
 
 
-def train_steps_per_s(iterations: int, repeats: int, threads: int = 2, env_processes: int = 2) -> dict[str, float]:
+def train_steps_per_s(iterations: int, repeats: int, threads: int = 2,
+                      env_processes: int = 2) -> dict[str, float]:
     """Env steps per second of ``crowdbench train h2int``'s loop (rollout + PPO update, evaluations off), default
     configuration apart from the speed settings given."""
     import tempfile

@@ -222,9 +222,11 @@ TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
 
 
 def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[str, str] | None = None,
-                         episodes: int | None = None, seed: int | None = None) -> str:
+                         episodes: int | None = None, seed: int | None = None,
+                         reference: str | None = "h2int") -> str:
     """The paper's tables with one row per method: success / collision / timeout [%], navigation time [s] per
-    setting; the best success of each setting in bold. Ablation entries get their own tables."""
+    setting; the best success of each setting in bold. Ablation entries get their own tables, headed by the
+    ``reference`` method's row when it is on the board."""
     groups = groups or {}
     out = ["# crowdbench leaderboard", ""]
     if episodes is not None:
@@ -236,6 +238,8 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
         labels = [lb for lb in board if groups.get(lb, "main") == group]
         if not labels:
             continue
+        if group == "ablation" and reference in board and reference not in labels:
+            labels.insert(0, reference)
         if group == "ablation":
             out += ["## Ablations", ""]
         for table in ("I", "II", "III"):
