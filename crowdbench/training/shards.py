@@ -167,7 +167,10 @@ class ShardedWorlds:
 
     @staticmethod
     def _recv(conn: Connection) -> Any:
-        status, value = conn.recv()
+        try:
+            status, value = conn.recv()
+        except (EOFError, ConnectionResetError) as e:
+            raise RuntimeError("crowd-world worker process exited unexpectedly (killed? out of memory?)") from e
         if status != "ok":
             raise RuntimeError(f"crowd-world worker failed:\n{value}")
         return value
@@ -178,8 +181,11 @@ class ShardedWorlds:
         conn = self.conns[k]
         if conn is None:
             self._local_result = getattr(self.local, method)(*args)
-        else:
+            return
+        try:
             conn.send((method, args))
+        except (BrokenPipeError, ConnectionResetError) as e:
+            raise RuntimeError("crowd-world worker process exited unexpectedly (killed? out of memory?)") from e
 
     def wait(self, k: int) -> Any:
         """The result of the call last sent to shard ``k``."""

@@ -99,6 +99,11 @@ class TrainConfig:
     def __post_init__(self) -> None:
         if self.variant not in VARIANTS:
             raise ValueError(f"variant={self.variant!r}; valid choices: {', '.join(VARIANTS)}")
+        for name in ("num_envs", "steps_per_env", "epochs", "mini_batches", "threads", "env_processes"):
+            if getattr(self, name) < 1:
+                raise ValueError(f"{name}={getattr(self, name)}; valid choices: an integer ≥ 1")
+        if self.env_processes > self.num_envs:
+            raise ValueError(f"env_processes={self.env_processes}; valid choices: 1 … num_envs ({self.num_envs})")
         if self.num_envs % self.mini_batches:
             raise ValueError(f"num_envs={self.num_envs} must be divisible by mini_batches={self.mini_batches} "
                              "(rsl-rl silently drops the remainder from recurrent updates)")

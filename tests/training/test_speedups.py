@@ -174,3 +174,21 @@ def test_scripted_inference_follows_training_updates():
     eager = actor.bucketed(robot, edges, valid).detach()  # grad mode: the eager encoder
     assert torch.allclose(scripted, eager, atol=1e-5)
     assert set(actor.state_dict()) == keys
+
+
+def test_dead_worker_and_bad_speed_settings_fail_clearly():
+    from crowdbench.training.train import TrainConfig
+
+    spec = ShardSpec(make_config(), 4, "circle_crossing", "responsive_orca", {"responsiveness": 0.5})
+    worlds = ShardedWorlds(spec, shards=2, local=False)
+    try:
+        worlds.procs[1].kill()
+        worlds.procs[1].join()
+        with pytest.raises(RuntimeError, match="exited unexpectedly"):
+            worlds.send_step(1, np.zeros((2, 2)), np.zeros(2, dtype=np.int64), 0.5)
+            worlds.wait(1)
+    finally:
+        worlds.close()
+    for bad in ({"threads": 0}, {"env_processes": 0}, {"epochs": 0}, {"env_processes": 300}):
+        with pytest.raises(ValueError, match=next(iter(bad))):
+            TrainConfig(**bad)
