@@ -9,7 +9,9 @@ Figures (medians of repeated runs, with the spread = max − min):
 * ``train_steps_per_s`` — H²INT PPO training end to end (rollout + update), default configuration (both cores:
   two world processes with pipelined rollouts, two threads in the update), 10 iterations from scratch after 2 warm-up
   iterations, evaluations off; ``train_steps_per_s_1_core`` — the same pinned to one core (one process, one thread);
-* ``h2int_inference_ms`` — one decision for one robot (encoder + GRU + head), CPU, one thread.
+* ``h2int_inference_ms`` — one decision for one robot (encoder + GRU + head), CPU, one thread;
+* ``decision_ms[policy]`` — one decision of *every registered robot policy* in a 20-pedestrian crossing (policies
+  registered later, e.g. look-ahead baselines, get their figure automatically).
 
 Writes ``benchmarks/RESULTS.md`` and ``benchmarks/throughput.png`` (steps/s against N and against batch size).
 """
@@ -178,6 +180,51 @@ def h2int_inference_ms(repeats: int, checkpoint: str | None = None) -> dict[str,
     return _repeat(run, repeats)
 
 
+def decision_ms(policy_name: str, repeats: int, num_humans: int = 20) -> dict[str, float]:
+    """One decision of a registered robot policy for one robot [ms]: circle crossing, ``num_humans`` latent-responsive
+    pedestrians after 20 steps (a realistic crowd around the robot), the policy's own observation, one thread."""
+    import torch
+
+    from crowdbench.config import WorldConfig
+    from crowdbench.policies import make_policy
+    from crowdbench.robots import make_observation
+    from crowdbench.worlds import CrowdWorld
+
+    torch.set_num_threads(1)
+    cfg = WorldConfig(num_humans=num_humans)
+    policy = make_policy(policy_name, cfg)
+    world = CrowdWorld(cfg, 1, "circle_crossing", "responsive_orca", {"responsiveness": 0.5})
+    world.reset(seeds=[0])
+    for _ in range(20):
+        world.step(np.zeros((1, 2)))
+    obs = make_observation(policy.observation, cfg).build(world)
+    for _ in range(20):
+        policy.act(obs)
+
+    def timed() -> float:
+        t = time.perf_counter()
+        for _ in range(200):
+            policy.act(obs)
+        return (time.perf_counter() - t) / 200 * 1e3
+
+    return _repeat(timed, repeats)
+
+
+def decision_ms_all(repeats: int) -> dict[str, Any]:
+    """:func:`decision_ms` of every registered robot policy — a policy added to the registry (or through the
+    ``crowdbench.policies`` entry point) gets its figure without touching this module. Policies that cannot be built
+    with default arguments are reported with the reason."""
+    from crowdbench.policies import POLICIES
+
+    out: dict[str, Any] = {}
+    for name in POLICIES.names():
+        try:
+            out[name] = decision_ms(name, repeats)
+        except Exception as e:  # noqa: BLE001 - reported, the other figures still run
+            out[name] = {"skipped": f"{type(e).__name__}: {e}"}
+    return out
+
+
 def run(quick: bool = False) -> dict[str, Any]:
     """All figures; ``quick`` uses fewer steps and repeats (for smoke tests and CI)."""
     rep = 3 if quick else 7
@@ -191,6 +238,7 @@ def run(quick: bool = False) -> dict[str, Any]:
             res["orca_agent_steps_per_s"][str(n)] = orca_agent_steps_per_s(n, 64, (3 if quick else 20)
                                                                            if n == 200 else (10 if quick else 60), rep)
         res["h2int_inference_ms"] = h2int_inference_ms(rep)
+        res["decision_ms"] = decision_ms_all(rep)
     res["train_steps_per_s"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3)
     with one_core():
         res["train_steps_per_s_1_core"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3, 1, 1)
@@ -217,6 +265,11 @@ def results_markdown(res: dict[str, Any]) -> str:
                      f"{s['spread']:,.0f} |")
     s = res["h2int_inference_ms"]
     lines.append(f"| h2int_inference_ms | 12 seen | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
+    for name, s in res.get("decision_ms", {}).items():
+        if "median" in s:
+            lines.append(f"| decision_ms ({name}) | 20 | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
+        else:
+            lines.append(f"| decision_ms ({name}) | 20 | 1 | skipped: {s['skipped']} | |")
     lines += ["", "Targets: " + "; ".join(f"{k} {'≤' if 'ms' in k else '≥'} {v:,}" for k, v in TARGETS.items()), ""]
     return "\n".join(lines)
 

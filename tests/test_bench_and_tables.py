@@ -16,7 +16,10 @@ def test_bench_figures_are_positive_and_formatted():
     assert env["median"] > 0 and orca["median"] > 0 and inf["median"] > 0 and env["runs"] == 2
     res = {"machine": bench.machine(), "quick": True, "env_steps_per_s": {"10": {"1": env, "64": env}},
            "orca_agent_steps_per_s": {"20": orca}, "train_steps_per_s": env, "h2int_inference_ms": inf}
+    res["decision_ms"] = {"orca": bench.decision_ms("orca", 2), "broken": {"skipped": "ValueError: x"}}
+    assert res["decision_ms"]["orca"]["median"] > 0
     md = bench.results_markdown(res)
+    assert "decision_ms (orca)" in md and "skipped: ValueError" in md
     assert "env_steps_per_s" in md and "h2int_inference_ms" in md and res["machine"]["logical_cores"] >= 1
 
 
