@@ -62,8 +62,8 @@ class TrainConfig:
     action_std: float = 0.3
     """Fixed standard deviation of the Gaussian policy [m/s]."""
     learning_rate: float = 3e-4
-    epochs: int = 1
-    mini_batches: int = 8
+    epochs: int = 4
+    mini_batches: int = 4
     gamma: float = 0.99
     lam: float = 0.95
     desired_kl: float = 0.01
