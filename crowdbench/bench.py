@@ -168,16 +168,21 @@ def h2int_inference_ms(repeats: int, checkpoint: str | None = None) -> dict[str,
            "humans": np.zeros((1, 30, 2), np.float32), "mask": np.zeros((1, 30), np.float32)}
     obs["humans"][0, :k] = rng.normal(scale=2, size=(k, 2))
     obs["mask"][0, :k] = 1
+    return _act_ms(policy, obs, repeats)
+
+
+def _act_ms(policy: Any, obs: dict[str, np.ndarray], repeats: int, calls: int = 200) -> dict[str, float]:
+    """Milliseconds per ``policy.act(obs)``: 20 warm-up calls, then ``repeats`` timings of ``calls`` calls each."""
     for _ in range(20):
         policy.act(obs)
 
-    def run() -> float:
+    def timed() -> float:
         t = time.perf_counter()
-        for _ in range(200):
+        for _ in range(calls):
             policy.act(obs)
-        return (time.perf_counter() - t) / 200 * 1e3
+        return (time.perf_counter() - t) / calls * 1e3
 
-    return _repeat(run, repeats)
+    return _repeat(timed, repeats)
 
 
 def decision_ms(policy_name: str, repeats: int, num_humans: int = 20) -> dict[str, float]:
@@ -197,17 +202,7 @@ def decision_ms(policy_name: str, repeats: int, num_humans: int = 20) -> dict[st
     world.reset(seeds=[0])
     for _ in range(20):
         world.step(np.zeros((1, 2)))
-    obs = make_observation(policy.observation, cfg).build(world)
-    for _ in range(20):
-        policy.act(obs)
-
-    def timed() -> float:
-        t = time.perf_counter()
-        for _ in range(200):
-            policy.act(obs)
-        return (time.perf_counter() - t) / 200 * 1e3
-
-    return _repeat(timed, repeats)
+    return _act_ms(policy, make_observation(policy.observation, cfg).build(world), repeats)
 
 
 def decision_ms_all(repeats: int) -> dict[str, Any]:

@@ -15,7 +15,7 @@ from tensordict import TensorDict
 
 from crowdbench.config import WorldConfig
 from crowdbench.policies.base import RobotPolicy, register
-from crowdbench.policies.h2int_net import H2INTActor, H2INTExport
+from crowdbench.policies.h2int_net import H2INTActor, H2INTExport, script
 
 FORMAT = "crowdbench.h2int/1"
 SCRIPT_BELOW = 64
@@ -77,11 +77,7 @@ class H2INTPolicy(RobotPolicy):
         """The frozen TorchScript module used for small batches (one robot: ~3× less per-call overhead than eager
         PyTorch; same outputs to 1e-5). Batches of 64+ worlds use the eager, bucketed encoder."""
         if self._script is None:
-            import warnings
-
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", DeprecationWarning)  # torch.jit is deprecated but still the fastest
-                self._script = torch.jit.freeze(torch.jit.script(H2INTExport(self.actor, trim=True).eval()))
+            self._script = script(H2INTExport(self.actor, trim=True).eval(), freeze=True)
         return self._script
 
     @torch.inference_mode()

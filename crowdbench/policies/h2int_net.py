@@ -33,6 +33,18 @@ EDGE_SCALE = 5.0
 """Relative positions are divided by this (the sensing range) before the edge MLP [m]."""
 
 
+def script(module: nn.Module, freeze: bool = False) -> torch.jit.ScriptModule:
+    """``torch.jit.script(module)`` (then ``torch.jit.freeze`` if ``freeze``) without the deprecation warnings:
+    TorchScript is deprecated in torch 2.13 but is still the fastest way here to run these small networks without
+    Python overhead."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        scripted = torch.jit.script(module)
+        return torch.jit.freeze(scripted) if freeze else scripted
+
+
 class GRUGate(nn.Module):
     """GTrXL gate: g(x, y) = (1 − z)⊙x + z⊙tanh(W_g y + U_g (r⊙x)), r, z = σ(...); bias makes it start near x."""
 
@@ -205,12 +217,8 @@ class H2INTActor(MLPModel):
         it under ``torch.inference_mode`` (see :meth:`bucketed`): its graph executor would keep inference tensors
         that autograd later refuses."""
         if self._scripted is None:
-            import warnings
-
             try:
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", DeprecationWarning)  # torch.jit: deprecated, fastest here
-                    scripted = torch.jit.script(self.encoder)
+                scripted = script(self.encoder)
                 pairs = [(name, buf) for name, buf in scripted.named_buffers()]
             except Exception:  # noqa: BLE001 - a torch without TorchScript: stay eager
                 scripted, pairs = self.encoder, []

@@ -143,6 +143,7 @@ class ShardedWorlds:
         self.slices = [slice(int(a), int(b)) for a, b in zip(self.bounds[:-1], self.bounds[1:], strict=True)]
         streams = np.random.SeedSequence(seed).spawn(spec.num_worlds)
         self.local = Shard(replace(spec, num_worlds=sizes[0]), streams[self.slices[0]]) if local else None
+        self._local_result: Any = None  # the local shard's result between send() and wait()
         ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
         self.conns: list[Connection | None] = [None] if local else []
         self.procs: list[Any] = []

@@ -116,9 +116,16 @@ class CrowdVecEnv(VecEnv):
     def reset_all(self) -> None:
         """Start fresh episodes in every world (next seed of each world's stream)."""
         out = self.worlds.reset_all(self.curriculum.rho)
-        for k, sl in enumerate(self.groups):
-            self._obs[k] = {key: v[sl] for key, v in out.obs.items()}
+        self._store_obs(None, out.obs)
         self.episode_length_buf = torch.from_numpy(out.steps)
+
+    def _store_obs(self, k: int | None, obs: dict[str, np.ndarray]) -> None:
+        """Keep group ``k``'s latest observations (``None``: ``obs`` covers every world)."""
+        if k is None:
+            for j, g in enumerate(self.groups):
+                self._obs[j] = {key: v[g] for key, v in obs.items()}
+        else:
+            self._obs[k] = obs
 
     def get_observations(self) -> TensorDict:
         """Current observations of every world (a new TensorDict each call: rollouts keep references)."""
@@ -135,11 +142,7 @@ class CrowdVecEnv(VecEnv):
             self.totals += np.bincount(outcomes, minlength=4)
             self.window_outcomes.extend(int(o) for o in outcomes)
             self.curriculum.record(outcomes == SUCCESS, self.episodes)
-        if k is None:
-            for j, g in enumerate(self.groups):
-                self._obs[j] = {key: v[g] for key, v in out.obs.items()}
-        else:
-            self._obs[k] = out.obs
+        self._store_obs(k, out.obs)
         self.episode_length_buf[sl] = torch.from_numpy(out.steps)
         extras = {"time_outs": torch.from_numpy(out.truncated), "log": self.log()}
         rewards = torch.from_numpy((out.reward * self.reward_scale).astype(np.float32))
