@@ -87,7 +87,8 @@ def train_cmd(args: argparse.Namespace) -> int:
     if args.algo != "h2int":
         raise ValueError(f"train: unknown algorithm {args.algo!r}; valid choices: h2int")
     overrides = {"variant": args.variant, "seed": args.seed, "anneal": not args.no_anneal}
-    for name in ("iterations", "minutes", "envs", "threads", "env_processes", "epochs", "mini_batches"):
+    for name in ("iterations", "minutes", "envs", "threads", "env_processes", "epochs", "mini_batches",
+                 "until_success"):
         value = getattr(args, name)
         if value is not None:
             overrides["num_envs" if name == "envs" else name] = value
@@ -97,7 +98,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         path = os.path.join(args.resume, "last.pt") if os.path.isdir(args.resume) else args.resume
         # a resumed run keeps its configuration; only its budget and speed settings may change
         cfg = TrainConfig.from_dict(load_checkpoint(path)["train_config"])
-        for name in ("iterations", "minutes", "threads", "env_processes"):
+        for name in ("iterations", "minutes", "threads", "env_processes", "until_success"):
             if getattr(args, name) is not None:
                 cfg = dataclasses.replace(cfg, **{name: getattr(args, name)})
         out = args.out or os.path.dirname(os.path.abspath(path))
@@ -213,6 +214,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")
     p.add_argument("--iterations", type=int, default=None, help="stop after this many PPO iterations in total")
     p.add_argument("--minutes", type=float, default=None, help="wall-clock budget in minutes")
+    p.add_argument("--until-success", type=float, default=None,
+                   help="stop once a quick evaluation (every 20 iterations: N=20, ρ=0.5) reaches this success rate")
     p.add_argument("--envs", type=int, default=None, help="worlds stepped together (default 256)")
     p.add_argument("--threads", type=int, default=None,
                    help="CPU threads for the network, data-parallel over samples (default 2)")

@@ -26,6 +26,7 @@ from rsl_rl.models import MLPModel
 from rsl_rl.modules import RNN, EmpiricalNormalization
 from tensordict import TensorDict
 
+from crowdbench.policies.buckets import INFERENCE_OVERHEAD, TRAIN_OVERHEAD, last_column, partition
 from crowdbench.policies.parallel import parallel_map
 
 VARIANTS = ("h2int", "flat", "meanpool", "standard")
@@ -183,23 +184,27 @@ class H2INTActor(MLPModel):
     def _get_latent_dim(self) -> int:
         return self.latent_dim
 
-    def bucketed(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor, buckets: int = 4):
+    def bucketed(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor, max_groups: int = 8):
         """Encode samples grouped by how many pedestrians they see, each group trimmed to its own maximum: exact
         (samples are independent), and most samples see few pedestrians, so little attention is spent on padding.
-        With ``self.threads > 1`` the samples are dealt round-robin (in that order, so the shares cost the same) to
-        that many threads, forward and backward (:mod:`crowdbench.policies.parallel`)."""
+        The groups are chosen to minimise padded tokens plus a per-call overhead
+        (:func:`crowdbench.policies.buckets.partition`). With ``self.threads > 1`` the samples are dealt round-robin
+        (in that order, so the shares cost the same) to that many threads, forward and backward
+        (:mod:`crowdbench.policies.parallel`)."""
         if robot.shape[0] < 64:
             return self.encoder(robot, edges, valid, trim=True)
         if torch.is_inference_mode_enabled():  # no_grad instead (see scripted_encoder); the result is used as usual
             with torch.inference_mode(False), torch.no_grad():
-                return self.bucketed(robot, edges, valid, buckets)
-        cols = torch.arange(1, valid.shape[1] + 1, device=valid.device)
-        order = torch.argsort((valid.long() * cols).amax(1))  # by last valid column
+                return self.bucketed(robot, edges, valid, max_groups)
+        last = last_column(valid)
+        order = torch.argsort(last, stable=True)
+        overhead = TRAIN_OVERHEAD if torch.is_grad_enabled() else INFERENCE_OVERHEAD
 
         encoder = self.scripted_encoder()
 
-        def encode(idx: torch.Tensor) -> torch.Tensor:
-            return torch.cat([encoder(robot[i], edges[i], valid[i], True) for i in idx.chunk(buckets)])
+        def encode(idx: torch.Tensor) -> torch.Tensor:  # idx: sample indices sorted by last column
+            sizes = partition(last[idx], max_groups, overhead)
+            return torch.cat([encoder(robot[i], edges[i], valid[i], True) for i in idx.split(sizes)])
 
         # inference batches below ~1000 samples are faster on one thread (hand-off costs more than it saves)
         if self.threads > 1 and robot.shape[0] >= (64 * self.threads if torch.is_grad_enabled() else 1024):

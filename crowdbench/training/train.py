@@ -83,6 +83,8 @@ class TrainConfig:
     eval_every: int = 20
     """Iterations between quick deterministic evaluations (circle crossing, 20 pedestrians, ρ = 0.5)."""
     eval_episodes: int = 100
+    until_success: float = 0.0
+    """Stop after the first quick evaluation whose success rate reaches this (0 = never; needs ``eval_every``)."""
     extra: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
@@ -102,6 +104,10 @@ class TrainConfig:
         for name in ("num_envs", "steps_per_env", "epochs", "mini_batches", "threads", "env_processes"):
             if getattr(self, name) < 1:
                 raise ValueError(f"{name}={getattr(self, name)}; valid choices: an integer ≥ 1")
+        if not 0.0 <= self.until_success <= 1.0:
+            raise ValueError(f"until_success={self.until_success}; valid choices: a success rate in [0, 1] (0 = off)")
+        if self.until_success and not self.eval_every:
+            raise ValueError("until_success needs quick evaluations; valid choices: eval_every ≥ 1")
         if self.env_processes > self.num_envs:
             raise ValueError(f"env_processes={self.env_processes}; valid choices: 1 … num_envs ({self.num_envs})")
         if self.num_envs % self.mini_batches:
@@ -258,7 +264,10 @@ class Trainer:
                 for k in ("success_rate", "collision_rate", "timeout_rate"):
                     self._log(f"Eval/{k}", s[k])
             self._progress(row)
-            done = self.iteration >= cfg.iterations or (cfg.minutes and self.elapsed >= cfg.minutes * 60)
+            reached = bool(cfg.until_success and self.evals and self.evals[-1]["iteration"] == self.iteration
+                           and self.evals[-1]["success_rate"] >= cfg.until_success)
+            done = (self.iteration >= cfg.iterations or (cfg.minutes and self.elapsed >= cfg.minutes * 60)
+                    or reached)
             if self.iteration % cfg.checkpoint_every == 0 or done:
                 self.save("last.pt")  # before the restart: a resumed run replays the same restart from here
                 self.write_artifacts()

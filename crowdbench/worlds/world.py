@@ -25,7 +25,8 @@ import numpy as np
 import pymunk
 
 from crowdbench.config import WorldConfig
-from crowdbench.geometry import norm, obstacle_edges, swept_pair_min_distance, swept_segment_fraction
+from crowdbench.geometry import (norm, obstacle_edges, pair_overlaps, swept_pair_min_distance,
+                                 swept_segment_fraction)
 from crowdbench.humans.base import CrowdState, HumanModel, make
 from crowdbench.worlds.layouts import Layout, make_layout
 from crowdbench.worlds.physics import PymunkWorlds
@@ -292,12 +293,7 @@ class CrowdWorld:
 
         overlaps = np.zeros(self.num_worlds, dtype=np.int64)
         if self.num_humans > 1:
-            hp = self.pos[:, 1:]
-            dx = hp[:, :, None, 0] - hp[:, None, :, 0]
-            dy = hp[:, :, None, 1] - hp[:, None, :, 1]
-            rr = self.radius[:, 1:, None] + self.radius[:, None, 1:]
-            act = self.active[:, 1:, None] & self.active[:, None, 1:]
-            overlaps = (np.triu(dx * dx + dy * dy < rr * rr, 1) & act).sum(axis=(1, 2))
+            overlaps = pair_overlaps(self.pos[:, 1:], self.radius[:, 1:], self.active[:, 1:])
         if self.num_humans:
             self._renew_goals()
         return StepResult(reward, terms, terminated, truncated, outcome, d_min, overlaps, robot_hit)

@@ -109,3 +109,19 @@ def test_no_anneal_trains_at_final_difficulty(tmp_path):
     tr = train(tiny(iterations=1, anneal=False, eval_every=0, env_processes=1), str(tmp_path / "fixed"), quiet=True)
     assert tr.env.curriculum.rho == 0.0 and not tr.env.curriculum.enabled
     assert tr.env.worlds.world.human_model.responsiveness == 0.0
+
+
+def test_until_success_stops_at_the_first_evaluation_that_reaches_it(tmp_path, monkeypatch):
+    from crowdbench.training.train import Trainer
+
+    rates = iter([0.5, 0.97, 1.0])
+    monkeypatch.setattr(Trainer, "evaluate", lambda self, episodes: {"success_rate": next(rates),
+                                                                      "collision_rate": 0.0, "timeout_rate": 0.0})
+    trainer = train(tiny(iterations=10, until_success=0.95), str(tmp_path / "run"), quiet=True)
+    assert trainer.iteration == 4  # evaluations at 2 (50 %) and 4 (97 %): stopped there, not at 10
+    assert [e["success_rate"] for e in trainer.evals] == [0.5, 0.97]
+    assert load_checkpoint(str(tmp_path / "run" / "last.pt"))["iteration"] == 4
+    with pytest.raises(ValueError, match="until_success"):
+        tiny(until_success=1.5)
+    with pytest.raises(ValueError, match="eval_every"):
+        tiny(until_success=0.9, eval_every=0)

@@ -201,3 +201,25 @@ def test_bad_input_errors_name_the_field():
         CrowdWorld(WorldConfig(), 1, "nope")
     with pytest.raises(ValueError, match="time_step must be > 0"):
         WorldConfig(time_step=0)
+
+
+def test_pedestrian_overlap_count_matches_brute_force():
+    """The compiled overlap counter agrees with the broadcast definition (pairs i < j, both active, d < r_i + r_j),
+    including touching pairs (not counted) and inactive padding slots."""
+    from crowdbench.geometry import pair_overlaps
+
+    rng = np.random.default_rng(0)
+    for B, A in [(64, 30), (7, 1), (3, 0), (16, 50)]:
+        pos = np.round(rng.random((B, A, 2)) * 4, 1)  # a 0.1 m grid: many exact ties at the boundary
+        radius = np.round(rng.uniform(0.2, 0.4, (B, A)), 1)
+        active = rng.random((B, A)) < 0.7
+        dx = pos[:, :, None, 0] - pos[:, None, :, 0]
+        dy = pos[:, :, None, 1] - pos[:, None, :, 1]
+        rr = radius[:, :, None] + radius[:, None, :]
+        both = active[:, :, None] & active[:, None, :]
+        expected = (np.triu(dx * dx + dy * dy < rr * rr, 1) & both).sum(axis=(1, 2))
+        np.testing.assert_array_equal(pair_overlaps(pos, radius, active), expected)
+    two = np.array([[[0.0, 0.0], [0.5, 0.0]]])
+    assert pair_overlaps(two, np.array([[0.3, 0.3]]), np.array([[True, True]]))[0] == 1
+    assert pair_overlaps(two, np.array([[0.25, 0.25]]), np.array([[True, True]]))[0] == 0  # touching
+    assert pair_overlaps(two, np.array([[0.3, 0.3]]), np.array([[True, False]]))[0] == 0

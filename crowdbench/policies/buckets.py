@@ -1,0 +1,73 @@
+"""Grouping samples by crowd size so that a set encoder spends little work on padding.
+
+Observations list pedestrians sorted by distance with the padding at the end, so a sample's cost in the encoder is
+set by its *last valid column* ``c`` (``c + 1`` tokens with the robot's). A group of samples runs trimmed to its
+largest ``c``. :func:`partition` splits samples sorted by ``c`` into contiguous groups minimising
+
+    Σ_groups (max c in group + 1) × (samples in group) + overhead × (number of groups),
+
+by dynamic programming over the distinct values of ``c`` (at most ``N_max + 1``, so this is microseconds in numba).
+Equal-size groups, the previous scheme, let the rare sample that sees 20+ pedestrians pad a quarter of the batch to
+its size: on a training mini-batch of 2,048 samples they paid for 11.8 tokens per sample for 7.8 valid ones.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+import torch
+
+TRAIN_OVERHEAD = 64.0
+"""Fixed cost of one more group, in tokens, with gradients (one encoder call forward and backward ≈ 64 tokens)."""
+INFERENCE_OVERHEAD = 192.0
+"""The same without gradients: per-token work is a third, per-call overhead about the same."""
+
+
+@nb.njit(cache=True)
+def _partition(hist: np.ndarray, max_groups: int, overhead: float) -> np.ndarray:  # pragma: no cover - numba
+    values = np.nonzero(hist)[0]
+    V = len(values)
+    cum = np.zeros(V + 1, dtype=np.int64)
+    for j in range(V):
+        cum[j + 1] = cum[j] + hist[values[j]]
+    G = min(max_groups, V)
+    best = np.full((G + 1, V + 1), np.inf)
+    arg = np.zeros((G + 1, V + 1), dtype=np.int64)
+    best[0, 0] = 0.0
+    for g in range(1, G + 1):
+        for j in range(1, V + 1):
+            width = values[j - 1] + 1.0
+            for i in range(g - 1, j):
+                c = best[g - 1, i] + width * (cum[j] - cum[i]) + overhead
+                if c < best[g, j]:
+                    best[g, j] = c
+                    arg[g, j] = i
+    g_best = 1
+    for g in range(2, G + 1):
+        if best[g, V] < best[g_best, V]:
+            g_best = g
+    sizes = np.zeros(g_best, dtype=np.int64)
+    j = V
+    for g in range(g_best, 0, -1):
+        i = arg[g, j]
+        sizes[g - 1] = cum[j] - cum[i]
+        j = i
+    return sizes
+
+
+def partition(last: torch.Tensor, max_groups: int = 8, overhead: float = TRAIN_OVERHEAD) -> list[int]:
+    """Group sizes for samples sorted by ``last`` (ascending ``(B,)`` ints ≥ 0, the last valid column + 1 — 0 for a
+    sample that sees nobody): contiguous, summing to ``B``, at most ``max_groups`` of them, minimising the cost in
+    the module docstring. An empty batch gives ``[]``."""
+    if last.numel() == 0:
+        return []
+    if max_groups < 1:
+        raise ValueError(f"max_groups={max_groups}; valid choices: an integer ≥ 1")
+    hist = np.bincount(last.numpy(), minlength=1).astype(np.int64)
+    return _partition(hist, max_groups, float(overhead)).tolist()
+
+
+def last_column(valid: torch.Tensor) -> torch.Tensor:
+    """``valid`` ``(B, N)`` bool → ``(B,)`` the 1-based index of each row's last valid column (0: none valid)."""
+    cols = torch.arange(1, valid.shape[1] + 1, device=valid.device)
+    return (valid.long() * cols).amax(1) if valid.shape[1] else valid.new_zeros(valid.shape[0], dtype=torch.long)
