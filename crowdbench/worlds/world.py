@@ -25,8 +25,7 @@ import numpy as np
 import pymunk
 
 from crowdbench.config import WorldConfig
-from crowdbench.geometry import (norm, obstacle_edges, pair_overlaps, swept_pair_min_distance,
-                                 swept_segment_fraction)
+from crowdbench.geometry import norm, obstacle_edges, pair_overlaps, swept_pair_min_distance, swept_segment_fraction
 from crowdbench.humans.base import CrowdState, HumanModel, make
 from crowdbench.worlds.layouts import Layout, make_layout
 from crowdbench.worlds.physics import PymunkWorlds

@@ -209,7 +209,7 @@ def test_bucket_partition_is_optimal_and_covers_the_batch():
         return total
 
     rng = np.random.default_rng(0)
-    for trial in range(40):
+    for _ in range(40):
         last = sorted(rng.integers(0, 12, size=int(rng.integers(1, 11))).tolist())
         overhead, cap = float(rng.choice([0.0, 3.0, 20.0])), int(rng.integers(1, 5))
         sizes = partition(torch.tensor(last), cap, overhead)
