@@ -176,7 +176,7 @@ class H2INTActor(MLPModel):
         self.threads = 1
         """CPU threads the encoder splits a batch across (set by the trainer; not saved)."""
         # the compiled encoder and its buffers (a plain tuple, not a registered submodule: checkpoints keep their keys)
-        self._scripted: tuple[nn.Module, list] | None = None
+        self._scripted: tuple[nn.Module, list[tuple[torch.Tensor, nn.Module, str]]] | None = None
 
     def _get_obs_dim(self, obs, obs_groups, obs_set):
         return ["robot", "humans", "mask"], 9
@@ -224,16 +224,19 @@ class H2INTActor(MLPModel):
         if self._scripted is None:
             try:
                 scripted = script(self.encoder)
-                pairs = [(name, buf) for name, buf in scripted.named_buffers()]
+                owners = dict(self.encoder.named_modules())
+                pairs = []
+                for name, buf in scripted.named_buffers():  # (scripted buffer, owning submodule, attribute)
+                    path, _, attr = name.rpartition(".")
+                    pairs.append((buf, owners[path], attr))
             except Exception:  # noqa: BLE001 - a torch without TorchScript: stay eager
                 scripted, pairs = self.encoder, []
             self._scripted = (scripted, pairs)
         scripted, pairs = self._scripted
-        if pairs:
-            mine = dict(self.encoder.named_buffers())
-            for name, buf in pairs:
-                if buf is not mine[name]:
-                    buf.copy_(mine[name])
+        for buf, owner, attr in pairs:
+            mine = owner._buffers[attr]
+            if buf is not mine:
+                buf.copy_(mine)
         return scripted
 
     def encode(self, obs: TensorDict, masks: torch.Tensor | None = None) -> torch.Tensor:
