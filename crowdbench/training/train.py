@@ -350,7 +350,33 @@ def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = F
     return trainer
 
 
-__all__ = ["TrainConfig", "Trainer", "plot_curve", "plot_runs", "train"]
+__all__ = ["TrainConfig", "Trainer", "plot_curve", "plot_runs", "runs_table", "train"]
+
+
+def _run_label(cfg: dict[str, Any]) -> str:
+    schedule = f"{cfg.get('epochs', 4)}×{cfg.get('mini_batches', 4)}"
+    return (f"{cfg['variant']} {schedule} seed {cfg['seed']}"
+            f"{'' if cfg.get('anneal', True) else ' (no annealing, ρ = 0)'}")
+
+
+def runs_table(history_files: list[str], bar: float = 0.95) -> str:
+    """Markdown table of training runs (``history.json`` files): when each first reached ``bar`` in the quick
+    evaluation (iteration, env steps, wall-clock minutes) and how it ended."""
+    lines = [f"| run | quick eval ≥ {100 * bar:.0f} % first at | env steps | minutes "
+             "| end: iterations, last quick eval, ρ | mean env-steps/s |", "|---|---|---|---|---|---|"]
+    for f in history_files:
+        with open(f) as fh:
+            run = json.load(fh)
+        h, evals = run["history"], run["evals"]
+        first = next((e for e in evals if e["success_rate"] >= bar), None)
+        reached = ((f"iteration {first['iteration']}", f"{first['env_steps'] / 1e6:.2f} M", f"{first['time'] / 60:.1f}")
+                   if first else ("not reached", "—", "—"))
+        last = f"{100 * evals[-1]['success_rate']:.0f} %" if evals else "—"
+        rate = h["env_steps"][-1] / max(h["time"][-1], 1e-9) if h["iteration"] else 0.0
+        rho = h["rho"][-1] if h["rho"] else float("nan")
+        end = f"{h['iteration'][-1] if h['iteration'] else 0}, {last}, ρ = {rho:.1f}"
+        lines.append(f"| {_run_label(run['config'])} | {' | '.join(reached)} | {end} | {rate:,.0f} |")
+    return "\n".join(lines)
 
 
 def plot_runs(history_files: list[str], path: str) -> None:
@@ -366,7 +392,7 @@ def plot_runs(history_files: list[str], path: str) -> None:
         with open(f) as fh:
             run = json.load(fh)
         cfg, h = run["config"], run["history"]
-        label = f"{cfg['variant']}{'' if cfg['anneal'] else ' (no annealing, ρ = 0)'}"
+        label = _run_label(cfg)
         steps = np.asarray(h["env_steps"]) / 1e6
         line = axes[0].plot(steps, h["train_success"], label=label)[0]
         axes[0].plot(steps, h["rho"], "--", color=line.get_color(), alpha=0.6)

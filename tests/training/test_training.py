@@ -125,3 +125,15 @@ def test_until_success_stops_at_the_first_evaluation_that_reaches_it(tmp_path, m
         tiny(until_success=1.5)
     with pytest.raises(ValueError, match="eval_every"):
         tiny(until_success=0.9, eval_every=0)
+
+
+def test_runs_table_reports_when_the_bar_was_first_reached(runs):
+    from crowdbench.training.train import runs_table
+
+    root, _, _ = runs
+    histories = [str(root / "straight" / "history.json"), str(root / "split" / "history.json")]
+    always = runs_table(histories, bar=0.0).splitlines()
+    assert len(always) == 4 and all("iteration 2 |" in row for row in always[2:])  # first evaluation: iteration 2
+    assert "1×2 seed 0" in always[2]  # schedule (epochs × mini-batches) and seed label each run
+    never = runs_table(histories, bar=1.01).splitlines()
+    assert all("not reached" in row for row in never[2:])
