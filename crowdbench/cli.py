@@ -134,11 +134,11 @@ def plot_cmd(args: argparse.Namespace) -> int:
 
 def curves_cmd(args: argparse.Namespace) -> int:
     """Compare training runs (history.json files) on one figure."""
-    from crowdbench.training.train import plot_runs, runs_table
+    from crowdbench.training.train import plot_evals, plot_runs, runs_table
 
-    plot_runs(args.histories, args.out)
+    (plot_evals if args.evals else plot_runs)(args.histories, args.out)
     print(f"wrote {args.out}")
-    if args.table:
+    if args.table is not None:
         print(runs_table(args.histories, args.table))
     return 0
 
@@ -259,6 +259,8 @@ def main(argv: list[str] | None = None) -> int:
     p = sub.add_parser("curves", help="compare training runs (history.json files)")
     p.add_argument("histories", nargs="+")
     p.add_argument("--out", default="curves.png")
+    p.add_argument("--evals", action="store_true",
+                   help="plot quick-eval success against env steps and minutes (default: training success, reward)")
     p.add_argument("--table", type=float, default=None, metavar="BAR",
                    help="also print a markdown table: when each run's quick evaluation first reached BAR (e.g. 0.95)")
     p.set_defaults(func=curves_cmd)

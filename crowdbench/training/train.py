@@ -350,7 +350,46 @@ def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = F
     return trainer
 
 
-__all__ = ["TrainConfig", "Trainer", "plot_curve", "plot_runs", "runs_table", "train"]
+__all__ = ["TrainConfig", "Trainer", "plot_curve", "plot_evals", "plot_runs", "runs_table", "train"]
+
+
+def plot_evals(history_files: list[str], path: str, bar: float = 0.95) -> None:
+    """Quick-evaluation success of several runs against env steps and against wall-clock minutes: one colour per
+    PPO schedule (epochs × mini-batches), one line style per seed, the bar dotted."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    runs = []
+    for f in history_files:
+        with open(f) as fh:
+            runs.append(json.load(fh))
+    schedules = sorted({(r["config"].get("epochs", 4), r["config"].get("mini_batches", 4)) for r in runs},
+                       key=lambda em: -em[0] * 100 - em[1])
+    seeds = sorted({r["config"]["seed"] for r in runs})
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    styles = ["-", "--", ":", "-."]
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100)
+    for r in runs:
+        cfg, evals = r["config"], r["evals"]
+        sched = (cfg.get("epochs", 4), cfg.get("mini_batches", 4))
+        kw = {"color": colours[schedules.index(sched) % len(colours)],
+              "linestyle": styles[seeds.index(cfg["seed"]) % len(styles)], "marker": "o", "markersize": 2.5,
+              "label": _run_label(cfg)}
+        succ = [e["success_rate"] for e in evals]
+        axes[0].plot([e["env_steps"] / 1e6 for e in evals], succ, **kw)
+        axes[1].plot([e["time"] / 60 for e in evals], succ, **kw)
+    axes[0].set(xlabel="environment steps [M]", ylabel="quick-eval success (N = 20, ρ = 0.5)", ylim=(0, 1.02))
+    axes[1].set(xlabel="wall-clock [min] (2 cores)", ylim=(0, 1.02))
+    for ax in axes:
+        ax.axhline(bar, color="grey", linestyle=":", linewidth=1)
+        ax.grid(alpha=0.3)
+    axes[1].legend(fontsize=7, loc="center right")
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
 
 
 def _run_label(cfg: dict[str, Any]) -> str:

@@ -137,3 +137,14 @@ def test_runs_table_reports_when_the_bar_was_first_reached(runs):
     assert "1×2 seed 0" in always[2]  # schedule (epochs × mini-batches) and seed label each run
     never = runs_table(histories, bar=1.01).splitlines()
     assert all("not reached" in row for row in never[2:])
+
+
+def test_curves_command_plots_and_tabulates_runs(runs, tmp_path, capsys):
+    root, _, _ = runs
+    histories = [str(root / "straight" / "history.json"), str(root / "split" / "history.json")]
+    for flag in ([], ["--evals"]):
+        out = tmp_path / f"c{len(flag)}.png"
+        assert main(["curves", *histories, "--out", str(out), "--table", "0.0", *flag]) == 0
+        assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    printed = capsys.readouterr().out
+    assert printed.count("| h2int 1×2 seed 0 | iteration 2 |") == 4  # two runs, printed once per figure
