@@ -224,7 +224,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--env-processes", type=int, default=None,
                    help="processes stepping the worlds (default 2; results are identical for any value)")
     p.add_argument("--epochs", type=int, default=None,
-                   help="PPO epochs per iteration (default 4; 1 is ~1.9x faster, reached the bar on 1 of 3 seeds)")
+                   help="PPO epochs per iteration (default 4; fewer run faster but learned less per step: "
+                        "leaderboards/schedule-study)")
     p.add_argument("--mini-batches", type=int, default=None, help="PPO mini-batches per epoch (default 4)")
     p.add_argument("--no-anneal", action="store_true",
                    help="no curriculum: train at the final ρ (rho_min = 0) from the start")
