@@ -361,20 +361,15 @@ def plot_evals(history_files: list[str], path: str, bar: float = 0.95) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    runs = []
-    for f in history_files:
-        with open(f) as fh:
-            runs.append(json.load(fh))
-    schedules = sorted({(r["config"].get("epochs", 4), r["config"].get("mini_batches", 4)) for r in runs},
-                       key=lambda em: -em[0] * 100 - em[1])
+    runs = _load_runs(history_files)
+    schedules = sorted({_schedule(r["config"]) for r in runs}, key=lambda em: (-em[0], -em[1]))
     seeds = sorted({r["config"]["seed"] for r in runs})
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     styles = ["-", "--", ":", "-."]
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100)
     for r in runs:
         cfg, evals = r["config"], r["evals"]
-        sched = (cfg.get("epochs", 4), cfg.get("mini_batches", 4))
-        kw = {"color": colours[schedules.index(sched) % len(colours)],
+        kw = {"color": colours[schedules.index(_schedule(cfg)) % len(colours)],
               "linestyle": styles[seeds.index(cfg["seed"]) % len(styles)], "marker": "o", "markersize": 2.5,
               "label": _run_label(cfg)}
         succ = [e["success_rate"] for e in evals]
@@ -392,9 +387,23 @@ def plot_evals(history_files: list[str], path: str, bar: float = 0.95) -> None:
     plt.close(fig)
 
 
+def _load_runs(history_files: list[str]) -> list[dict[str, Any]]:
+    """The ``history.json`` files written by :meth:`Trainer.write_artifacts`."""
+    runs = []
+    for f in history_files:
+        with open(f) as fh:
+            runs.append(json.load(fh))
+    return runs
+
+
+def _schedule(cfg: dict[str, Any]) -> tuple[int, int]:
+    """(epochs, mini-batches) of a saved run configuration."""
+    return cfg.get("epochs", 4), cfg.get("mini_batches", 4)
+
+
 def _run_label(cfg: dict[str, Any]) -> str:
-    schedule = f"{cfg.get('epochs', 4)}×{cfg.get('mini_batches', 4)}"
-    return (f"{cfg['variant']} {schedule} seed {cfg['seed']}"
+    epochs, mini_batches = _schedule(cfg)
+    return (f"{cfg['variant']} {epochs}×{mini_batches} seed {cfg['seed']}"
             f"{'' if cfg.get('anneal', True) else ' (no annealing, ρ = 0)'}")
 
 
@@ -403,9 +412,7 @@ def runs_table(history_files: list[str], bar: float = 0.95) -> str:
     evaluation (iteration, env steps, wall-clock minutes) and how it ended."""
     lines = [f"| run | quick eval ≥ {100 * bar:.0f} % first at | env steps | minutes "
              "| end: iterations, last quick eval, ρ | mean env-steps/s |", "|---|---|---|---|---|---|"]
-    for f in history_files:
-        with open(f) as fh:
-            run = json.load(fh)
+    for run in _load_runs(history_files):
         h, evals = run["history"], run["evals"]
         first = next((e for e in evals if e["success_rate"] >= bar), None)
         reached = ((f"iteration {first['iteration']}", f"{first['env_steps'] / 1e6:.2f} M", f"{first['time'] / 60:.1f}")
@@ -427,9 +434,7 @@ def plot_runs(history_files: list[str], path: str) -> None:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100)
-    for f in history_files:
-        with open(f) as fh:
-            run = json.load(fh)
+    for run in _load_runs(history_files):
         cfg, h = run["config"], run["history"]
         label = _run_label(cfg)
         steps = np.asarray(h["env_steps"]) / 1e6

@@ -290,9 +290,7 @@ class CrowdWorld:
         truncated = ~terminated & (self.steps >= cfg.max_steps)
         outcome = np.select([success, collision, truncated], [SUCCESS, COLLISION, TIMEOUT], RUNNING)
 
-        overlaps = np.zeros(self.num_worlds, dtype=np.int64)
-        if self.num_humans > 1:
-            overlaps = pair_overlaps(self.pos[:, 1:], self.radius[:, 1:], self.active[:, 1:])
+        overlaps = pair_overlaps(self.pos[:, 1:], self.radius[:, 1:], self.active[:, 1:])
         if self.num_humans:
             self._renew_goals()
         return StepResult(reward, terms, terminated, truncated, outcome, d_min, overlaps, robot_hit)
