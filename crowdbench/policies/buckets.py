@@ -6,9 +6,10 @@ largest ``c``. :func:`partition` splits samples sorted by ``c`` into contiguous 
 
     Σ_groups (max c in group + 1) × (samples in group) + overhead × (number of groups),
 
-by dynamic programming over the distinct values of ``c`` (at most ``N_max + 1``, so this is microseconds in numba).
+by dynamic programming over the distinct values of ``c`` (at most ``N_max + 1``; ≈ 0.2 ms per call with the histogram).
 Equal-size groups, the previous scheme, let the rare sample that sees 20+ pedestrians pad a quarter of the batch to
-its size: on a training mini-batch of 2,048 samples they paid for 11.8 tokens per sample for 7.8 valid ones.
+its size: on a 2,048-sample training mini-batch four equal groups cost 8.3 tokens per sample, this partition 6.8,
+for 6.5 needed.
 """
 
 from __future__ import annotations
