@@ -47,7 +47,12 @@ def main() -> None:
             obs = env.get_observations()
             alg.train_mode()
             rollout, update, serial = [], [], []
-            encoder = alg.actor.bucketed
+            actor = alg.actor
+            path = "packed_encode" if actor.packed else "bucketed"  # the encoder entry point training uses
+            encoder = getattr(actor, path)
+
+            def stub(r, e, v, max_groups=8):  # noqa: ARG001 - a cheap stand-in with the encoder's output shape
+                return actor.encoder.final_ln(actor.encoder.robot_mlp(r))
             for _ in range(args.repeats):
                 t = time.perf_counter()
                 with torch.inference_mode():
@@ -55,12 +60,11 @@ def main() -> None:
                     alg.compute_returns(obs)
                 rollout.append(time.perf_counter() - t)
                 stored = copy.deepcopy(alg.storage)
-                alg.actor.bucketed = lambda r, e, v, max_groups=8: alg.actor.encoder.final_ln(  # noqa: ARG005
-                    alg.actor.encoder.robot_mlp(r))
+                setattr(actor, path, stub)
                 t = time.perf_counter()
                 alg.update()
                 serial.append(time.perf_counter() - t)
-                alg.actor.bucketed = encoder
+                setattr(actor, path, encoder)
                 alg.storage = copy.deepcopy(stored)
                 t = time.perf_counter()
                 alg.update()
@@ -74,7 +78,7 @@ def main() -> None:
                 samples = []
                 for k in range(args.repeats + 2):
                     t = time.perf_counter()
-                    alg.actor.bucketed(robot, edges, valid).square().sum().backward()
+                    encoder(robot, edges, valid).square().sum().backward()
                     if k >= 2:
                         samples.append((time.perf_counter() - t) / batch * 1e6)
                 per_pass[threads] = samples
@@ -83,7 +87,7 @@ def main() -> None:
             tr.close()
     print(f"# H²INT training iteration breakdown ({machine()})")
     print(f"schedule {cfg.epochs} epochs × {cfg.mini_batches} mini-batches, {n:,} transitions per iteration, "
-          f"{cfg.threads} threads, {cfg.env_processes} world processes")
+          f"{cfg.threads} threads, {cfg.env_processes} world processes, encoder path: {path}")
     print(f"rollout (pipelined, incl. returns)   {_stats(rollout)}")
     print(f"PPO update                           {_stats(update)}")
     print(f"  of which not the encoder           {_stats(serial)}")

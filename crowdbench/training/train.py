@@ -79,6 +79,10 @@ class TrainConfig:
     """1: the worlds step in the training process. k ≥ 2: k worker processes step k groups of worlds while this
     process computes the next group's actions (:mod:`crowdbench.training.rollout`) — the same transitions, computed in
     another order (the network's batches differ, so results differ from ``1`` in the last bits)."""
+    packed: bool = True
+    """Encode packed tokens (:mod:`crowdbench.policies.packed`: valid tokens only, ragged attention) rather than
+    padded groups; the same function to float rounding, 1.4–2× faster. Checkpoints saved before this option resume
+    with ``False``, bit for bit."""
     checkpoint_every: int = 20
     eval_every: int = 20
     """Iterations between quick deterministic evaluations (circle crossing, 20 pedestrians, ρ = 0.5)."""
@@ -89,10 +93,12 @@ class TrainConfig:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> TrainConfig:
-        """The configuration saved in a checkpoint (older checkpoints' ``update_threads`` becomes ``threads``)."""
+        """The configuration saved in a checkpoint (older checkpoints' ``update_threads`` becomes ``threads``; their
+        missing ``packed`` means ``False``)."""
         d = dict(d)
         if "update_threads" in d:
             d["threads"] = d.pop("update_threads")
+        d.setdefault("packed", False)  # saved before packed encoding existed: keep their exact resume
         for key in ("humans_range", "head_dims"):
             if key in d:
                 d[key] = tuple(d[key])
@@ -155,6 +161,7 @@ class Trainer:
         self.runner = OnPolicyRunner(self.env, cfg.rsl_cfg(), log_dir=None)
         self.alg = self.runner.alg
         self.alg.actor.threads = cfg.threads
+        self.alg.actor.packed = cfg.packed
         self.iteration = 0
         self.env_steps = 0
         self.elapsed = 0.0

@@ -1,0 +1,69 @@
+"""The H²INT encoder on *packed* tokens: only the valid ones, all samples concatenated.
+
+``H2INTEncoder.forward`` pads every sample to the batch's largest crowd and runs attention through PyTorch's
+scaled-dot-product kernels. :func:`packed_encode` computes the same function (same parameters, same result to float
+rounding) with every sample's tokens — the robot, then the pedestrians it sees, in column order — stacked into one
+``(T, d)`` array: the linear layers, layer norms, gates and feed-forward blocks run once over all ``T`` tokens as
+large, efficient kernels, and attention runs within each sample's rows in :mod:`crowdbench.policies.ragged`.
+Differentiable through ordinary autograd (the attention has its own backward).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+import torch.nn as nn
+import torch.nn.functional as F  # noqa: N812 - the PyTorch convention
+
+from crowdbench.policies.ragged import ragged_attention
+
+
+def supported(encoder: nn.Module) -> bool:
+    """Packed evaluation covers the attention variants (``h2int``, ``flat``, ``standard``), not ``meanpool``."""
+    return bool(encoder.stages[0].attention)
+
+
+def _stage(stage: nn.Module, x: torch.Tensor, offsets: np.ndarray, robot_rows: torch.Tensor,
+           robot_only: bool) -> torch.Tensor:
+    """One encoder stage on packed tokens ``x`` ``(T, d)`` → ``(T, d)``, or ``(B, d)`` (robot tokens) when
+    ``robot_only``; the same computation as ``h2int_net.Stage.forward``."""
+    d = x.shape[1]
+    h = stage.ln1(x)
+    w, b = stage.qkv.weight, stage.qkv.bias
+    if robot_only:
+        kv = F.linear(h, w[d:], b[d:])
+        q = F.linear(h[robot_rows], w[:d], b[:d])
+        x = x[robot_rows]
+    else:
+        qkv = F.linear(h, w, b)
+        q, kv = qkv[:, :d], qkv[:, d:]
+    a = stage.out(ragged_attention(q, kv[:, :d], kv[:, d:], offsets, robot_only, stage.heads))
+    y = stage.gate1(x, a) if stage.gated else x + a
+    f = stage.ffn(stage.ln2(y))
+    return stage.gate2(y, f) if stage.gated else y + f
+
+
+def packed_encode(encoder: nn.Module, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
+    """``encoder(robot, edges, valid)`` for ``robot`` ``(B, 9)``, ``edges`` ``(B, N, 2)`` [m], ``valid`` ``(B, N)``
+    bool → context ``(B, d)``, on packed tokens (see the module docstring)."""
+    B = robot.shape[0]
+    b_idx, col = valid.nonzero(as_tuple=True)  # row-major: sample by sample, columns ascending
+    E = b_idx.shape[0]
+    counts = torch.bincount(b_idx, minlength=B) if E else b_idx.new_zeros(B)
+    offsets_t = torch.zeros(B + 1, dtype=torch.long)
+    torch.cumsum(counts + 1, 0, out=offsets_t[1:])
+    robot_rows = offsets_t[:-1]
+    edge_rows = torch.arange(E) + b_idx + 1  # every earlier sample adds one robot row
+    order = torch.empty(B + E, dtype=torch.long)  # packed row → row of cat([robot tokens, edge tokens])
+    order[robot_rows] = torch.arange(B)
+    order[edge_rows] = torch.arange(B, B + E)
+
+    phi_r = encoder.robot_mlp(encoder.robot_norm(robot)) + encoder.type_emb.weight[0] + encoder.pos_emb.weight[0]
+    phi_e = (encoder.edge_mlp(edges[b_idx, col] / encoder.edge_scale) + encoder.type_emb.weight[1]
+             + encoder.pos_emb(col + 1))
+    x = torch.cat([phi_r, phi_e])[order]
+    offsets = offsets_t.numpy()
+    n = len(encoder.stages)
+    for i, stage in enumerate(encoder.stages):
+        x = _stage(stage, x, offsets, robot_rows, i == n - 1)
+    return encoder.final_ln(x)

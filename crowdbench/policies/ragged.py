@@ -1,0 +1,141 @@
+"""Multi-head attention within variable-size token sets ("ragged" batches), forward and backward in numba.
+
+The H²INT encoder attends within each sample's own tokens — the robot and the 0–20 pedestrians it sees. Packing
+only the valid tokens of all samples into one ``(T, d)`` array (sample ``b`` owns rows ``offsets[b]:offsets[b+1]``,
+robot first) removes all padding, and lets every linear layer run as one large matrix product. What remains is the
+attention core, a few thousand multiply-adds per sample over 8-dimensional heads: PyTorch's scaled-dot-product
+kernels spend ≈ 10 µs per sample on it (blocking and dispatch built for long sequences); these loops ≈ 1 µs.
+
+Queries are either every token (``robot_only=False``) or only each sample's first token (``robot_only=True``, the
+H²INT last stage), one query row per sample in that case.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba as nb
+import numpy as np
+import torch
+
+_FM = {"reassoc", "contract"}  # vectorised sums (the order differs from PyTorch's anyway)
+
+
+@nb.njit(cache=True, nogil=True, fastmath=_FM)
+def _forward(q, k, v, offsets, robot_only, heads, probs, out):  # pragma: no cover - numba
+    """Queries ``q`` ``(Q, d)``, keys and values ``k``, ``v`` ``(T, d)``; writes ``out`` ``(Q, d)`` and the attention
+    weights ``probs`` (flat: per query row and head, ``S_b`` weights, in sample order)."""
+    d = k.shape[1]
+    dh = d // heads
+    scale = np.float32(1.0 / math.sqrt(dh))
+    B = offsets.shape[0] - 1
+    qi = 0
+    pp = 0
+    for b in range(B):
+        o0 = offsets[b]
+        S = offsets[b + 1] - o0
+        nq = 1 if robot_only else S
+        for _ in range(nq):
+            for h in range(heads):
+                c0 = h * dh
+                m = np.float32(-3.0e38)
+                for j in range(S):
+                    s = np.float32(0.0)
+                    for c in range(dh):
+                        s += q[qi, c0 + c] * k[o0 + j, c0 + c]
+                    s *= scale
+                    probs[pp + j] = s
+                    m = max(m, s)
+                tot = np.float32(0.0)
+                for j in range(S):
+                    e = np.float32(math.exp(probs[pp + j] - m))
+                    probs[pp + j] = e
+                    tot += e
+                inv = np.float32(1.0) / tot
+                for c in range(dh):
+                    out[qi, c0 + c] = 0.0
+                for j in range(S):
+                    p = probs[pp + j] * inv
+                    probs[pp + j] = p
+                    for c in range(dh):
+                        out[qi, c0 + c] += p * v[o0 + j, c0 + c]
+                pp += S
+            qi += 1
+
+
+@nb.njit(cache=True, nogil=True, fastmath=_FM)
+def _backward(q, k, v, offsets, robot_only, heads, probs, gout, gq, gk, gv):  # pragma: no cover - numba
+    """Gradients of ``Σ gout ⊙ out`` into gq ``(Q, d)``, gk, gv ``(T, d)`` (zero-initialised by the caller)."""
+    d = k.shape[1]
+    dh = d // heads
+    scale = np.float32(1.0 / math.sqrt(dh))
+    B = offsets.shape[0] - 1
+    dp = np.empty(64, np.float32)
+    qi = 0
+    pp = 0
+    for b in range(B):
+        o0 = offsets[b]
+        S = offsets[b + 1] - o0
+        if dp.shape[0] < S:
+            dp = np.empty(S, np.float32)
+        nq = 1 if robot_only else S
+        for _ in range(nq):
+            for h in range(heads):
+                c0 = h * dh
+                s_all = np.float32(0.0)
+                for j in range(S):
+                    p = probs[pp + j]
+                    s = np.float32(0.0)
+                    for c in range(dh):
+                        g = gout[qi, c0 + c]
+                        s += g * v[o0 + j, c0 + c]
+                        gv[o0 + j, c0 + c] += p * g
+                    dp[j] = s
+                    s_all += p * s
+                for j in range(S):
+                    ds = probs[pp + j] * (dp[j] - s_all) * scale
+                    for c in range(dh):
+                        gq[qi, c0 + c] += ds * k[o0 + j, c0 + c]
+                        gk[o0 + j, c0 + c] += ds * q[qi, c0 + c]
+                pp += S
+            qi += 1
+
+
+def _prob_size(offsets: np.ndarray, robot_only: bool, heads: int) -> int:
+    sizes = np.diff(offsets)
+    return int(heads * (sizes.sum() if robot_only else (sizes * sizes).sum()))
+
+
+class RaggedAttention(torch.autograd.Function):
+    """``out = softmax(q kᵀ / √d_h) v`` per head within each sample's rows; see the module docstring."""
+
+    @staticmethod
+    def forward(ctx, q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets: np.ndarray,  # type: ignore[override]
+                robot_only: bool, heads: int) -> torch.Tensor:
+        qn, kn, vn = (t.detach().contiguous().numpy() for t in (q, k, v))
+        probs = np.empty(_prob_size(offsets, robot_only, heads), np.float32)
+        out = np.empty_like(qn)
+        _forward(qn, kn, vn, offsets, robot_only, heads, probs, out)
+        ctx.saved = (qn, kn, vn, offsets, robot_only, heads, probs)
+        return torch.from_numpy(out)
+
+    @staticmethod
+    def backward(ctx, gout: torch.Tensor):  # type: ignore[override]
+        qn, kn, vn, offsets, robot_only, heads, probs = ctx.saved
+        gq, gk, gv = np.zeros_like(qn), np.zeros_like(kn), np.zeros_like(vn)
+        _backward(qn, kn, vn, offsets, robot_only, heads, probs, gout.contiguous().numpy(), gq, gk, gv)
+        ctx.saved = None
+        return torch.from_numpy(gq), torch.from_numpy(gk), torch.from_numpy(gv), None, None, None
+
+
+def ragged_attention(q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets: np.ndarray, robot_only: bool,
+                     heads: int) -> torch.Tensor:
+    """Attention within each sample's token rows: ``q`` ``(T, d)`` (or ``(B, d)`` when ``robot_only``), ``k``, ``v``
+    ``(T, d)``, ``offsets`` ``(B + 1,)`` int64 row boundaries → ``(rows of q, d)``. Differentiable."""
+    if torch.is_grad_enabled() and (q.requires_grad or k.requires_grad or v.requires_grad):
+        return RaggedAttention.apply(q, k, v, offsets, robot_only, heads)
+    qn, kn, vn = (t.detach().contiguous().numpy() for t in (q, k, v))
+    probs = np.empty(_prob_size(offsets, robot_only, heads), np.float32)
+    out = np.empty_like(qn)
+    _forward(qn, kn, vn, offsets, robot_only, heads, probs, out)
+    return torch.from_numpy(out)
