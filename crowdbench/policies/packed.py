@@ -15,6 +15,7 @@ import torch
 import torch.nn as nn
 import torch.nn.functional as F  # noqa: N812 - the PyTorch convention
 
+from crowdbench.policies.fused_gate import fused_gate
 from crowdbench.policies.ragged import ragged_attention
 
 
@@ -37,10 +38,11 @@ def _stage(stage: nn.Module, x: torch.Tensor, offsets: np.ndarray, robot_rows: t
     else:
         qkv = F.linear(h, w, b)
         q, kv = qkv[:, :d], qkv[:, d:]
-    a = stage.out(ragged_attention(q, kv[:, :d], kv[:, d:], offsets, robot_only, stage.heads))
-    y = stage.gate1(x, a) if stage.gated else x + a
+    att = ragged_attention(q, kv[:, :d], kv[:, d:], offsets, robot_only, stage.heads)
+    # gated: the output projection only feeds the gate's W, so it is folded into it
+    y = fused_gate(stage.gate1, x, att, stage.out) if stage.gated else x + stage.out(att)
     f = stage.ffn(stage.ln2(y))
-    return stage.gate2(y, f) if stage.gated else y + f
+    return fused_gate(stage.gate2, y, f) if stage.gated else y + f
 
 
 def packed_encode(encoder: nn.Module, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:

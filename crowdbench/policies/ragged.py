@@ -21,7 +21,7 @@ import torch
 _FM = {"reassoc", "contract"}  # vectorised sums (the order differs from PyTorch's anyway)
 
 
-@nb.njit(cache=True, nogil=True, fastmath=_FM)
+@nb.njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def _forward(q, k, v, offsets, robot_only, heads, probs, out):  # pragma: no cover - numba
     """Queries ``q`` ``(Q, d)``, keys and values ``k``, ``v`` ``(T, d)``; writes ``out`` ``(Q, d)`` and the attention
     weights ``probs`` (flat: per query row and head, ``S_b`` weights, in sample order)."""
@@ -63,7 +63,7 @@ def _forward(q, k, v, offsets, robot_only, heads, probs, out):  # pragma: no cov
             qi += 1
 
 
-@nb.njit(cache=True, nogil=True, fastmath=_FM)
+@nb.njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def _backward(q, k, v, offsets, robot_only, heads, probs, gout, gq, gk, gv):  # pragma: no cover - numba
     """Gradients of ``Σ gout ⊙ out`` into gq ``(Q, d)``, gk, gv ``(T, d)`` (zero-initialised by the caller)."""
     d = k.shape[1]
