@@ -4,7 +4,8 @@
 
 In PyTorch this is four matrix products and about a dozen elementwise kernels forward (twenty backward), each
 streaming a ``(T, d)`` array through memory. Here the four products stay PyTorch matrix products and everything
-between them is one numba loop per phase (two forward, two backward). σ and tanh use rational approximations
+between them is one numba loop per phase (the products through
+:mod:`crowdbench.policies.fast_linear`) (two forward, two backward). σ and tanh use rational approximations
 (Eigen's ``generic_fast_tanh_float``, absolute error ≤ 4e-7, tested), which vectorise. Used by
 :mod:`crowdbench.policies.packed` on token arrays ``(T, d)``.
 """
@@ -15,6 +16,8 @@ import numba as nb
 import numpy as np
 import torch
 import torch.nn as nn
+
+from crowdbench.policies.fast_linear import linear
 
 _FM = {"reassoc", "contract", "nsz"}
 _F = np.float32
@@ -99,12 +102,12 @@ def _np(t: torch.Tensor) -> np.ndarray:
 def _forward(x: torch.Tensor, y: torch.Tensor, w: torch.Tensor, wb: torch.Tensor | None, u: torch.Tensor,
              ug: torch.Tensor, bg: torch.Tensor) -> tuple[torch.Tensor, ...]:
     x, y = x.detach().contiguous(), y.detach().contiguous()
-    wv = y @ w.detach().T if wb is None else torch.addmm(wb.detach(), y, w.detach().T)
-    uv = x @ u.detach().T
+    wv = linear(y, w.detach(), None if wb is None else wb.detach())
+    uv = linear(x, u.detach())
     xn = x.numpy()
     r, z, rx = np.empty_like(xn), np.empty_like(xn), np.empty_like(xn)
     _fwd_rz(wv.numpy(), uv.numpy(), xn, _np(bg), r, z, rx)
-    ugv = torch.from_numpy(rx) @ ug.detach().T
+    ugv = linear(torch.from_numpy(rx), ug.detach())
     hc, out = np.empty_like(xn), np.empty_like(xn)
     _fwd_out(wv.numpy(), ugv.numpy(), z, xn, hc, out)
     return torch.from_numpy(out), x, y, torch.from_numpy(r), torch.from_numpy(z), torch.from_numpy(rx), \
@@ -131,12 +134,12 @@ class FusedGate(torch.autograd.Function):
         duv = np.empty((T, 2 * d), np.float32)
         _bwd_out(_np(gout), z.numpy(), hc.numpy(), x.numpy(), dx, dwv, duv)
         dph = torch.from_numpy(dwv[:, 2 * d:])
-        drx = dph @ ug.detach()
+        drx = linear(dph.contiguous(), ug.detach().t().contiguous())
         d_ug = dph.T @ rx
         _bwd_r(drx.numpy(), x.numpy(), r.numpy(), dx, dwv, duv)
         dwv_t, duv_t = torch.from_numpy(dwv), torch.from_numpy(duv)
-        dy = dwv_t @ w.detach()
-        dx_t = torch.from_numpy(dx).add_(duv_t @ u.detach())
+        dy = linear(dwv_t, w.detach().t().contiguous())
+        dx_t = torch.from_numpy(dx).add_(linear(duv_t, u.detach().t().contiguous()))
         d_wb = dwv_t.sum(0) if ctx.has_wb else None
         return dx_t, dy, dwv_t.T @ y, d_wb, duv_t.T @ x, d_ug, -duv_t[:, d:].sum(0)
 

@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 import torch
 import torch.nn as nn
-import torch.nn.functional as F  # noqa: N812 - the PyTorch convention
 
+from crowdbench.policies.fast_linear import linear
 from crowdbench.policies.fused_gate import fused_gate
 from crowdbench.policies.ragged import ragged_attention
 
@@ -22,6 +22,14 @@ from crowdbench.policies.ragged import ragged_attention
 def supported(encoder: nn.Module) -> bool:
     """Packed evaluation covers the attention variants (``h2int``, ``flat``, ``standard``), not ``meanpool``."""
     return bool(encoder.stages[0].attention)
+
+
+def _apply(module: nn.Module, x: torch.Tensor) -> torch.Tensor:
+    """``module(x)`` for a ``Linear`` or a ``Sequential`` of linears and activations, its linears through
+    :func:`crowdbench.policies.fast_linear.linear`."""
+    for m in module if isinstance(module, nn.Sequential) else (module,):
+        x = linear(x, m.weight, m.bias) if isinstance(m, nn.Linear) else m(x)
+    return x
 
 
 def _stage(stage: nn.Module, x: torch.Tensor, offsets: np.ndarray, robot_rows: torch.Tensor,
@@ -32,16 +40,16 @@ def _stage(stage: nn.Module, x: torch.Tensor, offsets: np.ndarray, robot_rows: t
     h = stage.ln1(x)
     w, b = stage.qkv.weight, stage.qkv.bias
     if robot_only:
-        kv = F.linear(h, w[d:], b[d:])
-        q = F.linear(h[robot_rows], w[:d], b[:d])
+        kv = linear(h, w[d:], b[d:])
+        q = linear(h[robot_rows], w[:d], b[:d])
         x = x[robot_rows]
     else:
-        qkv = F.linear(h, w, b)
+        qkv = linear(h, w, b)
         q, kv = qkv[:, :d], qkv[:, d:]
     att = ragged_attention(q, kv[:, :d], kv[:, d:], offsets, robot_only, stage.heads)
     # gated: the output projection only feeds the gate's W, so it is folded into it
-    y = fused_gate(stage.gate1, x, att, stage.out) if stage.gated else x + stage.out(att)
-    f = stage.ffn(stage.ln2(y))
+    y = fused_gate(stage.gate1, x, att, stage.out) if stage.gated else x + _apply(stage.out, att)
+    f = _apply(stage.ffn, stage.ln2(y))
     return fused_gate(stage.gate2, y, f) if stage.gated else y + f
 
 
@@ -60,8 +68,9 @@ def packed_encode(encoder: nn.Module, robot: torch.Tensor, edges: torch.Tensor, 
     order[robot_rows] = torch.arange(B)
     order[edge_rows] = torch.arange(B, B + E)
 
-    phi_r = encoder.robot_mlp(encoder.robot_norm(robot)) + encoder.type_emb.weight[0] + encoder.pos_emb.weight[0]
-    phi_e = (encoder.edge_mlp(edges[b_idx, col] / encoder.edge_scale) + encoder.type_emb.weight[1]
+    phi_r = (_apply(encoder.robot_mlp, encoder.robot_norm(robot)) + encoder.type_emb.weight[0]
+             + encoder.pos_emb.weight[0])
+    phi_e = (_apply(encoder.edge_mlp, edges[b_idx, col] / encoder.edge_scale) + encoder.type_emb.weight[1]
              + encoder.pos_emb(col + 1))
     x = torch.cat([phi_r, phi_e])[order]
     offsets = offsets_t.numpy()
