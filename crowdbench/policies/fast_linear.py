@@ -16,7 +16,6 @@ from __future__ import annotations
 import torch
 import torch.nn.functional as F  # noqa: N812 - the PyTorch convention
 
-
 ROWS_QUANTUM = 256
 """oneDNN compiles a kernel for every new row count (≈ 7 ms each; then cached, 1,024 entries): row counts are padded
 up to a multiple of this, so a training run meets a few dozen shapes per layer, not thousands."""

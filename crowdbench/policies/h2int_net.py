@@ -181,7 +181,7 @@ class H2INTActor(MLPModel):
         """CPU threads the encoder splits a batch across (set by the trainer; not saved)."""
         self.packed = False
         """Encode through :mod:`crowdbench.policies.packed` (valid tokens only, ragged attention) instead of
-        :meth:`bucketed` — 1.4–2× faster forward + backward; equal to float rounding. The trainer turns it on;
+        :meth:`bucketed` — ≈ 2× faster forward + backward; equal to float rounding. The trainer turns it on;
         evaluation keeps the bucketed path, so published results reproduce bit for bit. Not saved."""
         # the compiled encoder and its buffers (a plain tuple, not a registered submodule: checkpoints keep their keys)
         self._scripted: tuple[nn.Module, list[tuple[torch.Tensor, nn.Module, str]]] | None = None
@@ -214,9 +214,8 @@ class H2INTActor(MLPModel):
             sizes = partition(last[idx], max_groups, overhead)
             return torch.cat([encoder(robot[i], edges[i], valid[i], True) for i in idx.split(sizes)])
 
-        # inference batches below ~1000 samples are faster on one thread (hand-off costs more than it saves)
-        if self.threads > 1 and robot.shape[0] >= (64 * self.threads if torch.is_grad_enabled() else 1024):
-            shares = [order[k:: self.threads] for k in range(self.threads)]
+        shares = self._thread_shares(order)
+        if shares:
             return parallel_map(self.encoder, encode, shares, robot.shape[0])
         out = robot.new_empty((robot.shape[0], self.encoder.final_ln.normalized_shape[0]))
         out[order] = encode(order)
@@ -226,15 +225,21 @@ class H2INTActor(MLPModel):
         """:func:`crowdbench.policies.packed.packed_encode` on ``self.threads`` threads (samples dealt round-robin in
         order of crowd size, so the shares cost the same; forward and backward, :mod:`crowdbench.policies.parallel`).
         """
-        n = robot.shape[0]
-        # inference batches below ~1000 samples are faster on one thread (and rollouts share the cores with the
-        # world processes)
+        enc = self.encoder
+        shares = self._thread_shares(torch.argsort(valid.sum(1), stable=True))
+        if shares:
+            return parallel_map(enc, lambda i: packed.packed_encode(enc, robot[i], edges[i], valid[i]), shares,
+                                robot.shape[0])
+        return packed.packed_encode(enc, robot, edges, valid)
+
+    def _thread_shares(self, order: torch.Tensor) -> list[torch.Tensor] | None:
+        """Samples in ``order`` (ascending cost) dealt round-robin to ``self.threads`` shares, or ``None`` to stay on
+        one thread: always for one thread, and for inference batches below ~1000 samples (the hand-off costs more
+        than it saves, and rollouts share the cores with the world processes)."""
+        n = order.shape[0]
         if self.threads > 1 and n >= (64 * self.threads if torch.is_grad_enabled() else 1024):
-            order = torch.argsort(valid.sum(1), stable=True)
-            shares = [order[k:: self.threads] for k in range(self.threads)]
-            enc = self.encoder
-            return parallel_map(enc, lambda i: packed.packed_encode(enc, robot[i], edges[i], valid[i]), shares, n)
-        return packed.packed_encode(self.encoder, robot, edges, valid)
+            return [order[k:: self.threads] for k in range(self.threads)]
+        return None
 
     def scripted_encoder(self) -> nn.Module:
         """The encoder compiled with TorchScript (the eager one where TorchScript is unavailable). Same outputs and

@@ -101,9 +101,15 @@ def _backward(q, k, v, offsets, robot_only, heads, probs, gout, gq, gk, gv):  # 
             qi += 1
 
 
-def _prob_size(offsets: np.ndarray, robot_only: bool, heads: int) -> int:
+def _run(q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets: np.ndarray, robot_only: bool,
+         heads: int) -> tuple[np.ndarray, ...]:
+    """The forward kernel on contiguous copies; returns ``(out, q, k, v, probs)`` as arrays."""
+    qn, kn, vn = (t.detach().contiguous().numpy() for t in (q, k, v))
     sizes = np.diff(offsets)
-    return int(heads * (sizes.sum() if robot_only else (sizes * sizes).sum()))
+    probs = np.empty(int(heads * (sizes.sum() if robot_only else (sizes * sizes).sum())), np.float32)
+    out = np.empty_like(qn)
+    _forward(qn, kn, vn, offsets, robot_only, heads, probs, out)
+    return out, qn, kn, vn, probs
 
 
 class RaggedAttention(torch.autograd.Function):
@@ -112,10 +118,7 @@ class RaggedAttention(torch.autograd.Function):
     @staticmethod
     def forward(ctx, q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets: np.ndarray,  # type: ignore[override]
                 robot_only: bool, heads: int) -> torch.Tensor:
-        qn, kn, vn = (t.detach().contiguous().numpy() for t in (q, k, v))
-        probs = np.empty(_prob_size(offsets, robot_only, heads), np.float32)
-        out = np.empty_like(qn)
-        _forward(qn, kn, vn, offsets, robot_only, heads, probs, out)
+        out, qn, kn, vn, probs = _run(q, k, v, offsets, robot_only, heads)
         ctx.saved = (qn, kn, vn, offsets, robot_only, heads, probs)
         return torch.from_numpy(out)
 
@@ -134,8 +137,4 @@ def ragged_attention(q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets:
     ``(T, d)``, ``offsets`` ``(B + 1,)`` int64 row boundaries → ``(rows of q, d)``. Differentiable."""
     if torch.is_grad_enabled() and (q.requires_grad or k.requires_grad or v.requires_grad):
         return RaggedAttention.apply(q, k, v, offsets, robot_only, heads)
-    qn, kn, vn = (t.detach().contiguous().numpy() for t in (q, k, v))
-    probs = np.empty(_prob_size(offsets, robot_only, heads), np.float32)
-    out = np.empty_like(qn)
-    _forward(qn, kn, vn, offsets, robot_only, heads, probs, out)
-    return torch.from_numpy(out)
+    return torch.from_numpy(_run(q, k, v, offsets, robot_only, heads)[0])

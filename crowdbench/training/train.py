@@ -81,8 +81,8 @@ class TrainConfig:
     another order (the network's batches differ, so results differ from ``1`` in the last bits)."""
     packed: bool = True
     """Encode packed tokens (:mod:`crowdbench.policies.packed`: valid tokens only, ragged attention) rather than
-    padded groups; the same function to float rounding, 1.4–2× faster. Checkpoints saved before this option resume
-    with ``False``, bit for bit."""
+    padded groups; the same function to float rounding, ≈ 2× faster forward + backward. Checkpoints saved before this
+    option resume with ``False``, bit for bit."""
     checkpoint_every: int = 20
     eval_every: int = 20
     """Iterations between quick deterministic evaluations (circle crossing, 20 pedestrians, ρ = 0.5)."""
