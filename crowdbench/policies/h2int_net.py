@@ -28,7 +28,7 @@ from tensordict import TensorDict
 
 from crowdbench.policies import packed
 from crowdbench.policies.buckets import INFERENCE_OVERHEAD, TRAIN_OVERHEAD, last_column, partition
-from crowdbench.policies.parallel import parallel_map
+from crowdbench.policies.parallel import parallel_map, trajectory_shares
 
 VARIANTS = ("h2int", "flat", "meanpool", "standard")
 EDGE_SCALE = 5.0
@@ -177,6 +177,8 @@ class H2INTActor(MLPModel):
         self.encoder = H2INTEncoder(n_max, variant, d_model, heads, ffn)
         self.rnn = RNN(d_model, gru_hidden, 1, "gru")
         self._cache: tuple | None = None
+        self._value: tuple | None = None  # (obs, value) of the parallel update path, taken by the critic
+        self._critic_head: nn.Module | None = None  # the critic's value MLP (a reference, not a submodule)
         self.threads = 1
         """CPU threads the encoder splits a batch across (set by the trainer; not saved)."""
         self.packed = False
@@ -192,18 +194,19 @@ class H2INTActor(MLPModel):
     def _get_latent_dim(self) -> int:
         return self.latent_dim
 
-    def bucketed(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor, max_groups: int = 8):
+    def bucketed(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor, max_groups: int = 8,
+                 threads: int | None = None):
         """Encode samples grouped by how many pedestrians they see, each group trimmed to its own maximum: exact
         (samples are independent), and most samples see few pedestrians, so little attention is spent on padding.
         The groups are chosen to minimise padded tokens plus a per-call overhead
         (:func:`crowdbench.policies.buckets.partition`). With ``self.threads > 1`` the samples are dealt round-robin
         (in that order, so the shares cost the same) to that many threads, forward and backward
-        (:mod:`crowdbench.policies.parallel`)."""
+        (:mod:`crowdbench.policies.parallel`); ``threads`` overrides that count."""
         if robot.shape[0] < 64:
             return self.encoder(robot, edges, valid, trim=True)
         if torch.is_inference_mode_enabled():  # no_grad instead (see scripted_encoder); the result is used as usual
             with torch.inference_mode(False), torch.no_grad():
-                return self.bucketed(robot, edges, valid, max_groups)
+                return self.bucketed(robot, edges, valid, max_groups, threads)
         last = last_column(valid)
         order = torch.argsort(last, stable=True)
         overhead = TRAIN_OVERHEAD if torch.is_grad_enabled() else INFERENCE_OVERHEAD
@@ -214,31 +217,34 @@ class H2INTActor(MLPModel):
             sizes = partition(last[idx], max_groups, overhead)
             return torch.cat([encoder(robot[i], edges[i], valid[i], True) for i in idx.split(sizes)])
 
-        shares = self._thread_shares(order)
+        shares = self._thread_shares(order, threads)
         if shares:
-            return parallel_map(self.encoder, encode, shares, robot.shape[0])
+            return parallel_map(self.encoder, lambda k: encode(shares[k]), shares, robot.shape[0])
         out = robot.new_empty((robot.shape[0], self.encoder.final_ln.normalized_shape[0]))
         out[order] = encode(order)
         return out
 
-    def packed_encode(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
+    def packed_encode(self, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor,
+                      threads: int | None = None) -> torch.Tensor:
         """:func:`crowdbench.policies.packed.packed_encode` on ``self.threads`` threads (samples dealt round-robin in
         order of crowd size, so the shares cost the same; forward and backward, :mod:`crowdbench.policies.parallel`).
         """
         enc = self.encoder
-        shares = self._thread_shares(torch.argsort(valid.sum(1), stable=True))
+        shares = self._thread_shares(torch.argsort(valid.sum(1), stable=True), threads)
         if shares:
-            return parallel_map(enc, lambda i: packed.packed_encode(enc, robot[i], edges[i], valid[i]), shares,
-                                robot.shape[0])
+            def encode(k: int) -> torch.Tensor:
+                i = shares[k]
+                return packed.packed_encode(enc, robot[i], edges[i], valid[i])
+            return parallel_map(enc, encode, shares, robot.shape[0])
         return packed.packed_encode(enc, robot, edges, valid)
 
-    def _thread_shares(self, order: torch.Tensor) -> list[torch.Tensor] | None:
-        """Samples in ``order`` (ascending cost) dealt round-robin to ``self.threads`` shares, or ``None`` to stay on
-        one thread: always for one thread, and for inference batches below ~1000 samples (the hand-off costs more
-        than it saves, and rollouts share the cores with the world processes)."""
-        n = order.shape[0]
-        if self.threads > 1 and n >= (64 * self.threads if torch.is_grad_enabled() else 1024):
-            return [order[k:: self.threads] for k in range(self.threads)]
+    def _thread_shares(self, order: torch.Tensor, threads: int | None = None) -> list[torch.Tensor] | None:
+        """Samples in ``order`` (ascending cost) dealt round-robin to ``threads`` (default ``self.threads``) shares,
+        or ``None`` to stay on one thread: always for one thread, and for inference batches below ~1000 samples (the
+        hand-off costs more than it saves, and rollouts share the cores with the world processes)."""
+        n, threads = order.shape[0], self.threads if threads is None else threads
+        if threads > 1 and n >= (64 * threads if torch.is_grad_enabled() else 1024):
+            return [order[k::threads] for k in range(threads)]
         return None
 
     def scripted_encoder(self) -> nn.Module:
@@ -266,19 +272,65 @@ class H2INTActor(MLPModel):
                 buf.copy_(mine)
         return scripted
 
-    def encode(self, obs: TensorDict, masks: torch.Tensor | None = None) -> torch.Tensor:
+    def encode(self, obs: TensorDict | dict[str, torch.Tensor], masks: torch.Tensor | None = None,
+               threads: int | None = None) -> torch.Tensor:
         """Context z for every step: ``(N, d)`` in rollouts, ``(T, B, d)`` for padded trajectories (only the valid
-        entries are encoded; padding stays zero)."""
+        entries are encoded; padding stays zero). ``threads`` overrides ``self.threads``."""
         robot, edges, valid = obs["robot"], obs["humans"], obs["mask"] > 0.5
         encode = self.packed_encode if self.packed and packed.supported(self.encoder) else self.bucketed
         if masks is None:
-            return encode(robot, edges, valid)
+            return encode(robot, edges, valid, threads=threads)
         z = robot.new_zeros((*masks.shape, self.encoder.final_ln.normalized_shape[0]))
-        z[masks] = encode(robot[masks], edges[masks], valid[masks])
+        z[masks] = encode(robot[masks], edges[masks], valid[masks], threads=threads)
         return z
 
-    def trunk(self, obs: TensorDict, masks: torch.Tensor | None = None, hidden_state=None) -> torch.Tensor:
-        return self.rnn(self.encode(obs, masks), masks, hidden_state).squeeze(0)
+    def trunk(self, obs: TensorDict | dict[str, torch.Tensor], masks: torch.Tensor | None = None, hidden_state=None,
+              threads: int | None = None) -> torch.Tensor:
+        return self.rnn(self.encode(obs, masks, threads), masks, hidden_state).squeeze(0)
+
+    def forward(self, obs: TensorDict, masks: torch.Tensor | None = None, hidden_state=None,
+                stochastic_output: bool = False) -> torch.Tensor:
+        """rsl-rl's ``MLPModel.forward``; in PPO updates (trajectories given, gradients on, ``threads > 1``, a
+        critic bound) the whole network — encoder, GRU, actor head *and* the critic's value head — runs data-parallel
+        by environment (:meth:`_parallel_heads`), and the value waits for :meth:`H2INTCritic.forward`."""
+        self._value = None
+        if masks is None or self.threads < 2 or self._critic_head is None or not torch.is_grad_enabled():
+            return super().forward(obs, masks, hidden_state, stochastic_output)
+        out = self._parallel_heads(obs, masks, hidden_state)
+        mean = out[..., :-1]
+        self._cache = None
+        self._value = (obs, out[..., -1:])
+        if self.distribution is None:
+            return mean
+        if stochastic_output:
+            self.distribution.update(mean)
+            return self.distribution.sample()
+        return self.distribution.deterministic_output(mean)
+
+    def _parallel_heads(self, obs: TensorDict, masks: torch.Tensor, hidden_state: torch.Tensor) -> torch.Tensor:
+        """``cat([actor head, value head](trunk))`` ``(T, B, A + 1)`` for a recurrent mini-batch (padded
+        trajectories ``obs`` ``(T, J, ·)``, ``masks`` ``(T, J)``, ``hidden_state`` ``(1, J, H)``; ``B`` environments),
+        the environments split across ``self.threads`` threads with equal token counts; forward and backward in the
+        threads (:func:`crowdbench.policies.parallel.parallel_map`). The same function as the one-thread path, to
+        float rounding."""
+        T = masks.shape[0]
+        tokens = ((obs["mask"] > 0.5).sum(-1) + 1) * masks  # (T, J): the encoder's work
+        trajs, envs = trajectory_shares(masks, tokens.sum(0), self.threads)
+        head = self._critic_head
+        steps = torch.arange(T)
+
+        def run(k: int) -> torch.Tensor:  # share k's rows, environment-major: (b·T, A + 1)
+            j = trajs[k]
+            sub = {key: obs[key][:, j] for key in ("robot", "humans", "mask")}
+            latent = self.trunk(sub, masks[:, j], hidden_state[:, j], threads=1)
+            y = torch.cat([self.mlp(latent), head(latent)], -1)  # (T, b, A + 1)
+            return y.transpose(0, 1).reshape(-1, y.shape[-1])
+
+        rows = [(e[:, None] * T + steps).reshape(-1) for e in envs]
+        n_env = sum(int(e.shape[0]) for e in envs)
+        params = [*self.parameters(), *head.parameters()]
+        out = parallel_map(params, run, rows, n_env * T)
+        return out.view(n_env, T, -1).transpose(0, 1)
 
     def get_latent(self, obs, masks=None, hidden_state=None):
         latent = self.trunk(obs, masks, hidden_state)
@@ -315,6 +367,16 @@ class H2INTCritic(MLPModel):
         self.latent_dim = actor.latent_dim
         super().__init__(obs, obs_groups, obs_set, output_dim, hidden_dims, activation, False, None)
         object.__setattr__(self, "_actor", actor)  # a reference, not a submodule: parameters are not duplicated
+        object.__setattr__(actor, "_critic_head", self.mlp)  # for the actor's data-parallel update path
+
+    def forward(self, obs: TensorDict, masks: torch.Tensor | None = None, hidden_state=None,
+                stochastic_output: bool = False) -> torch.Tensor:
+        """The value computed by the actor's data-parallel update path for this observation object (taken once), or
+        rsl-rl's ``MLPModel.forward`` on the shared trunk."""
+        value, self._actor._value = self._actor._value, None
+        if value is not None and value[0] is obs:
+            return value[1]
+        return super().forward(obs, masks, hidden_state, stochastic_output)
 
     def _get_obs_dim(self, obs, obs_groups, obs_set):
         return ["robot", "humans", "mask"], 9

@@ -31,8 +31,8 @@ def _pool(threads: int) -> ThreadPoolExecutor:
         return _POOLS[threads]
 
 
-Fn = Callable[[torch.Tensor], torch.Tensor]
-"""``fn(index) → (len(index), D)``: the network (using its own parameters) on the samples ``index``."""
+Fn = Callable[[int], torch.Tensor]
+"""``fn(k) → (len(shares[k]), D)``: the network (using its own parameters) on share ``k``'s samples."""
 
 
 class _Shares(torch.autograd.Function):
@@ -42,11 +42,11 @@ class _Shares(torch.autograd.Function):
     @staticmethod
     def forward(ctx, fn: Fn, shares: Sequence[torch.Tensor], n: int,  # type: ignore[override]
                 *params: torch.Tensor) -> torch.Tensor:
-        def run(idx: torch.Tensor) -> torch.Tensor:
+        def run(k: int) -> torch.Tensor:
             with torch.enable_grad():
-                return fn(idx)
+                return fn(k)
 
-        outs = list(_pool(len(shares)).map(run, shares))
+        outs = list(_pool(len(shares)).map(run, range(len(shares))))
         ctx.outs, ctx.shares, ctx.params = outs, shares, params
         return _assemble(shares, [o.detach() for o in outs], n)
 
@@ -79,16 +79,52 @@ def _sum(gs: Sequence[torch.Tensor | None]) -> torch.Tensor | None:
     return total
 
 
-def parallel_map(module: nn.Module, fn: Fn, shares: Sequence[torch.Tensor], n: int) -> torch.Tensor:
-    """Evaluate ``fn`` on each index tensor of ``shares`` (a partition of ``range(n)``) in its own thread and
-    assemble the ``(n, D)`` result; differentiable w.r.t. ``module``'s parameters when grad mode is on."""
-    params = [p for p in module.parameters() if p.requires_grad]
+def parallel_map(params: nn.Module | Sequence[torch.Tensor], fn: Fn, shares: Sequence[torch.Tensor],
+                 n: int) -> torch.Tensor:
+    """Evaluate ``fn(k)`` for every share ``k`` in its own thread and assemble the ``(n, D)`` result, share ``k``'s
+    rows going to the indices ``shares[k]`` (the shares partition ``range(n)``); differentiable w.r.t. ``params`` (a
+    module's parameters, or a list) when grad mode is on."""
+    params = [p for p in (params.parameters() if isinstance(params, nn.Module) else params) if p.requires_grad]
     if torch.is_grad_enabled() and params:
         return _Shares.apply(fn, list(shares), n, *params)
     inference = torch.is_inference_mode_enabled()
 
-    def run(idx: torch.Tensor) -> torch.Tensor:
+    def run(k: int) -> torch.Tensor:
         with torch.inference_mode(inference), torch.no_grad():
-            return fn(idx)
+            return fn(k)
 
-    return _assemble(shares, list(_pool(len(shares)).map(run, shares)), n)
+    return _assemble(shares, list(_pool(len(shares)).map(run, range(len(shares)))), n)
+
+
+def balanced_shares(cost: torch.Tensor, threads: int) -> list[torch.Tensor]:
+    """Split items of ``cost`` ``(n,)`` into ``threads`` shares of nearly equal total cost (greedy: costliest item
+    to the lightest share), each share's indices ascending. Deterministic (ties go to the lower share)."""
+    owner = torch.empty(cost.shape[0], dtype=torch.long)
+    load = [0.0] * threads
+    for i in torch.argsort(cost, descending=True, stable=True).tolist():
+        k = min(range(threads), key=load.__getitem__)
+        owner[i] = k
+        load[k] += float(cost[i])
+    return [torch.nonzero(owner == k).squeeze(1) for k in range(threads)]
+
+
+def trajectory_shares(masks: torch.Tensor, cost: torch.Tensor, threads: int
+                      ) -> tuple[list[torch.Tensor], list[torch.Tensor]]:
+    """Split an rsl-rl recurrent mini-batch by environment for ``threads`` threads.
+
+    ``masks`` ``(T, J)``: validity of the padded trajectories (rsl-rl's ``split_and_pad_trajectories`` layout: each
+    environment's trajectories consecutive, their lengths summing to ``T``); ``cost`` ``(J,)``: work per trajectory.
+    Returns per share the trajectory columns and the environments (both ascending); the share's trajectories,
+    unpadded, are exactly its environments' ``(T, ·)`` columns of the unpadded mini-batch.
+    """
+    T = masks.shape[0]
+    lengths = masks.sum(0)
+    env_of = torch.div(torch.cumsum(lengths, 0) - lengths, T, rounding_mode="floor")  # (J,)
+    n_env = int(env_of[-1]) + 1 if env_of.numel() else 0
+    env_cost = torch.zeros(n_env, dtype=torch.float64).index_add_(0, env_of, cost.double())
+    envs = balanced_shares(env_cost, threads)
+    owner = torch.empty(n_env, dtype=torch.long)
+    for k, e in enumerate(envs):
+        owner[e] = k
+    traj_owner = owner[env_of]
+    return [torch.nonzero(traj_owner == k).squeeze(1) for k in range(threads)], envs

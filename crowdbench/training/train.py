@@ -24,6 +24,7 @@ from rsl_rl.runners import OnPolicyRunner
 from crowdbench.io import atomic_path, write_text
 from crowdbench.policies.h2int import FORMAT, H2INTPolicy, build_actor, load_checkpoint
 from crowdbench.policies.h2int_net import VARIANTS, H2INTActor, H2INTCritic, SharedTrunkPPO
+from crowdbench.training.malloc import keep_heap
 from crowdbench.training.rollout import collect
 from crowdbench.training.vecenv import CrowdVecEnv, Curriculum
 
@@ -149,6 +150,7 @@ class Trainer:
 
     def __init__(self, cfg: TrainConfig, out: str, quiet: bool = False) -> None:
         torch.set_num_threads(1)
+        keep_heap()  # before the world processes fork (crowdbench.training.malloc)
         self.cfg, self.out, self.quiet = cfg, out, quiet
         os.makedirs(out, exist_ok=True)
         torch.manual_seed(cfg.seed)

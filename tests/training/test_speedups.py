@@ -106,6 +106,49 @@ def test_pipelined_collection_writes_the_same_transitions():
         assert torch.allclose(a[key], b[key], atol=1e-5), key
 
 
+def test_data_parallel_update_matches_one_thread(tmp_path):
+    """In PPO updates with 2 threads the whole network (encoder, GRU, actor and value heads) runs split by
+    environment; the mini-batch's means, values and gradients equal the one-thread path's (episodes end inside the
+    rollout, so environments hold several trajectories)."""
+    from crowdbench.policies.parallel import trajectory_shares
+    from crowdbench.training.train import TrainConfig, Trainer
+
+    cfg = TrainConfig(num_envs=16, steps_per_env=40, d_model=16, heads=2, ffn=16, gru_hidden=16, head_dims=(16,),
+                      humans_range=(15, 25), eval_every=0, env_processes=1, threads=1, mini_batches=2)
+    tr = Trainer(cfg, str(tmp_path), quiet=True)
+    try:
+        alg = tr.alg
+        tr.env.episode_length_buf[:] = torch.arange(150, 198, 3)  # time-outs inside the rollout
+        with torch.inference_mode():
+            obs, _, _ = collect(alg, tr.env, tr.env.get_observations(), cfg.steps_per_env)
+            alg.compute_returns(obs)
+        batch = next(alg.storage.recurrent_mini_batch_generator(2, 1))
+        assert batch.masks.shape[1] > 8  # more trajectories than the mini-batch's 8 environments
+        trajs, envs = trajectory_shares(batch.masks, torch.ones(batch.masks.shape[1]), 2)
+        assert sorted(torch.cat(envs).tolist()) == list(range(8))
+        assert sorted(torch.cat(trajs).tolist()) == list(range(batch.masks.shape[1]))
+        params = [*alg.actor.parameters(), *alg.critic.parameters()]
+        results = []
+        for threads in (1, 2):
+            alg.actor.threads = threads
+            alg.optimizer.zero_grad()
+            alg.actor(batch.observations, masks=batch.masks, hidden_state=batch.hidden_states[0],
+                      stochastic_output=True)
+            logp = alg.actor.get_output_log_prob(batch.actions)
+            values = alg.critic(batch.observations, masks=batch.masks, hidden_state=batch.hidden_states[1])
+            (logp.sum() + values.square().sum()).backward()
+            results.append((alg.actor.output_mean.detach(), values.detach(),
+                            [p.grad.clone() for p in params if p.grad is not None]))
+        (m1, v1, g1), (m2, v2, g2) = results
+        assert m1.shape == (cfg.steps_per_env, 8, 2) and v1.shape == (cfg.steps_per_env, 8, 1)
+        assert torch.allclose(m1, m2, atol=1e-6) and torch.allclose(v1, v2, atol=1e-6)
+        assert len(g1) == len(g2) > 20
+        for a, b in zip(g1, g2, strict=True):
+            assert (a - b).norm() <= 1e-5 * a.norm() + 1e-7
+    finally:
+        tr.close()
+
+
 def _batch(n: int = 512, n_max: int = 30, seed: int = 0):
     g = torch.Generator().manual_seed(seed)
     robot = torch.randn(n, 9, generator=g)
