@@ -63,3 +63,28 @@ def test_fast_linear_matches_f_linear_with_gradients():
     for a, c in zip(torch.autograd.grad((y0 * gy).sum(), [x, w, b]), torch.autograd.grad((y1 * gy).sum(), [x, w, b]),
                     strict=True):
         assert torch.allclose(a, c, atol=1e-3)
+
+
+@pytest.mark.parametrize("variant", ["h2int", "flat", "standard"])
+def test_fused_inference_kernel_matches_the_encoder(variant):
+    """The one-kernel inference encoder (rollouts in the world processes) equals the encoder; trained-looking
+    normaliser statistics, holes in the mask and a robot that sees nobody included."""
+    from crowdbench.policies import fused_infer
+
+    torch.manual_seed(3)
+    enc = H2INTEncoder(20, variant)
+    with torch.no_grad():
+        enc.robot_norm._mean.normal_()
+        enc.robot_norm._std.uniform_(0.5, 2.0)
+        for p in enc.parameters():
+            p.add_(torch.randn_like(p) * 0.1)  # away from the initial gate biases and layer-norm identities
+    robot, edges, valid = _batch()
+    assert fused_infer.supported(enc)
+    with torch.no_grad():
+        z0 = enc(robot, edges, valid)
+        z1 = fused_infer.encode(enc, robot, edges, valid)
+    assert torch.allclose(z0, z1, atol=1e-5), (z0 - z1).abs().max()
+    with torch.no_grad():  # an optimiser step changes the weights in place: the kernel must see it
+        enc.final_ln.bias.add_(1.0)
+    assert torch.allclose(fused_infer.encode(enc, robot, edges, valid), z1 + 1.0, atol=1e-5)
+    assert not fused_infer.supported(H2INTEncoder(20, "meanpool"))

@@ -14,7 +14,7 @@ import numpy as np
 import torch
 import torch.nn as nn
 
-from crowdbench.policies.fast_linear import linear
+from crowdbench.policies.fast_linear import AVAILABLE, ROWS_QUANTUM, linear
 from crowdbench.policies.fused_gate import fused_gate
 from crowdbench.policies.ragged import ragged_attention
 
@@ -53,9 +53,19 @@ def _stage(stage: nn.Module, x: torch.Tensor, offsets: np.ndarray, robot_rows: t
     return fused_gate(stage.gate2, y, f) if stage.gated else y + f
 
 
+def _padded(n: int) -> int:
+    """Row count ``n`` rounded up to the linear layers' row quantum (so they need no padding copies)."""
+    q = ROWS_QUANTUM if AVAILABLE else 1
+    return -(-n // q) * q
+
+
 def packed_encode(encoder: nn.Module, robot: torch.Tensor, edges: torch.Tensor, valid: torch.Tensor) -> torch.Tensor:
     """``encoder(robot, edges, valid)`` for ``robot`` ``(B, 9)``, ``edges`` ``(B, N, 2)`` [m], ``valid`` ``(B, N)``
-    bool → context ``(B, d)``, on packed tokens (see the module docstring)."""
+    bool → context ``(B, d)``, on packed tokens (see the module docstring).
+
+    The token array carries padding rows up to a multiple of
+    :data:`~crowdbench.policies.fast_linear.ROWS_QUANTUM` (copies of token 0, never attended to; their outputs are
+    dropped and their gradients are exactly zero), so the linear layers never copy their inputs to pad them."""
     B = robot.shape[0]
     b_idx, col = valid.nonzero(as_tuple=True)  # row-major: sample by sample, columns ascending
     E = b_idx.shape[0]
@@ -64,9 +74,10 @@ def packed_encode(encoder: nn.Module, robot: torch.Tensor, edges: torch.Tensor, 
     torch.cumsum(counts + 1, 0, out=offsets_t[1:])
     robot_rows = offsets_t[:-1]
     edge_rows = torch.arange(E) + b_idx + 1  # every earlier sample adds one robot row
-    order = torch.empty(B + E, dtype=torch.long)  # packed row → row of cat([robot tokens, edge tokens])
+    order = torch.zeros(_padded(B + E), dtype=torch.long)  # packed row → row of cat([robot, edge tokens])
     order[robot_rows] = torch.arange(B)
     order[edge_rows] = torch.arange(B, B + E)
+    robot_rows_p = torch.cat([robot_rows, robot_rows.new_zeros(_padded(B) - B)])  # padding: token 0 again
 
     phi_r = (_apply(encoder.robot_mlp, encoder.robot_norm(robot)) + encoder.type_emb.weight[0]
              + encoder.pos_emb.weight[0])
@@ -76,5 +87,5 @@ def packed_encode(encoder: nn.Module, robot: torch.Tensor, edges: torch.Tensor, 
     offsets = offsets_t.numpy()
     n = len(encoder.stages)
     for i, stage in enumerate(encoder.stages):
-        x = _stage(stage, x, offsets, robot_rows, i == n - 1)
-    return encoder.final_ln(x)
+        x = _stage(stage, x, offsets, robot_rows_p, i == n - 1)
+    return encoder.final_ln(x[:B])

@@ -108,6 +108,7 @@ def _run(q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets: np.ndarray,
     sizes = np.diff(offsets)
     probs = np.empty(int(heads * (sizes.sum() if robot_only else (sizes * sizes).sum())), np.float32)
     out = np.empty_like(qn)
+    out[offsets.shape[0] - 1 if robot_only else offsets[-1]:] = 0.0  # rows past the samples' (padding)
     _forward(qn, kn, vn, offsets, robot_only, heads, probs, out)
     return out, qn, kn, vn, probs
 

@@ -19,14 +19,20 @@ import torch
 from rsl_rl.storage import RolloutStorage
 from tensordict import TensorDict
 
+from crowdbench.training import acting
 from crowdbench.training.vecenv import CrowdVecEnv
 
 
-def collect(alg: Any, env: CrowdVecEnv, obs: TensorDict, steps: int) -> tuple[TensorDict, dict, list[float]]:
+def collect(alg: Any, env: CrowdVecEnv, obs: TensorDict, steps: int, worker_acting: bool = False
+            ) -> tuple[TensorDict, dict, list[float]]:
     """Fill ``alg.storage`` with ``steps`` transitions per world (inside ``torch.inference_mode``).
 
-    Returns the observations after the last step, the last step's ``extras`` and the mean reward of every step.
+    ``worker_acting``: the world processes compute the actions (:mod:`crowdbench.training.acting`, where the actor
+    supports it). Returns the observations after the last step, the last step's ``extras`` and the mean reward of
+    every step.
     """
+    if worker_acting and acting.supported(alg.actor):
+        return acting.collect_worker_acting(alg, env, obs, steps)
     if len(env.groups) == 1:
         rewards: list[float] = []
         extras: dict = {}

@@ -13,6 +13,7 @@ point instead.
 from __future__ import annotations
 
 import multiprocessing as mp
+import pickle
 import traceback
 from dataclasses import dataclass, replace
 from multiprocessing.connection import Connection
@@ -59,6 +60,11 @@ class Shard:
                                 spec.human_model_kwargs)
         self.obs_builder = make_observation(spec.observation, spec.config)
         self.streams = [np.random.default_rng(s) for s in streams]
+        self.last_obs: dict[str, np.ndarray] = {}
+        self.policy: Any = None
+        """What :meth:`act_step` acts with (:class:`crowdbench.training.acting.RolloutPolicy`)."""
+        self.policy_state: Any = None
+        """The policy's recurrent state for these worlds (kept across :meth:`set_policy`; zeroed by resets)."""
 
     def _set_rho(self, rho: float | None) -> None:
         model = self.world.human_model
@@ -77,6 +83,7 @@ class Shard:
         self._set_rho(rho)
         self._reset(None)
         n = self.world.num_worlds
+        self.policy_state = None
         z = np.zeros(n, dtype=bool)
         return StepOut(np.zeros(n), z, z, np.zeros(n, dtype=np.int64), *self.observe())
 
@@ -93,7 +100,31 @@ class Shard:
 
     def observe(self) -> tuple[dict[str, np.ndarray], np.ndarray]:
         """Robot observations and the episode step counters."""
-        return self.obs_builder.build(self.world), self.world.steps.copy()
+        self.last_obs = self.obs_builder.build(self.world)
+        return self.last_obs, self.world.steps.copy()
+
+    def set_policy(self, policy: Any) -> None:
+        """Install the policy :meth:`act_step` acts with (a fresh copy before every rollout, pickled for a worker
+        process; the recurrent state stays). Worker processes use one intra-op torch thread, as training does."""
+        if isinstance(policy, bytes):  # pickled by the training process
+            if self.policy is None:
+                import torch
+
+                torch.set_num_threads(1)
+            policy = pickle.loads(policy)  # noqa: S301 - from our own parent process
+        self.policy = policy
+
+    def act_step(self, noise: np.ndarray, steps: np.ndarray, rho: float | None
+                 ) -> tuple[StepOut, dict[str, np.ndarray], np.ndarray]:
+        """Act on the last observations with the installed policy and the standard-normal ``noise`` ``(n, 2)``,
+        then :meth:`step`; returns the step, the policy's transition record and its next recurrent state (zeroed
+        for worlds that finished)."""
+        if self.policy_state is None:
+            self.policy_state = self.policy.initial_state(self.world.num_worlds)
+        actions, record, state = self.policy.act(self.last_obs, self.policy_state, noise)
+        out = self.step(actions, steps, rho)
+        self.policy_state = self.policy.reset_state(state, out.terminated | out.truncated)
+        return out, record, self.policy_state
 
     def get_streams(self) -> list[dict]:
         return [g.bit_generator.state for g in self.streams]
@@ -199,6 +230,10 @@ class ShardedWorlds:
     def send_step(self, k: int, actions: np.ndarray, steps: np.ndarray, rho: float | None) -> None:
         """Start stepping shard ``k`` (its slice of ``actions`` ``(n_k, 2)`` and ``steps`` ``(n_k,)``)."""
         self.send(k, "step", actions, steps, rho)
+
+    def send_act_step(self, k: int, noise: np.ndarray, steps: np.ndarray, rho: float | None) -> None:
+        """Start :meth:`Shard.act_step` on shard ``k`` (its slice of the ``noise`` and of ``steps``)."""
+        self.send(k, "act_step", noise, steps, rho)
 
     # ------------------------------------------------------------------ whole batch
     def call(self, method: str, per_shard_args: list[tuple]) -> list[Any]:

@@ -171,6 +171,16 @@ class CrowdVecEnv(VecEnv):
         """Finish group ``k``'s step: ``(obs, rewards, dones, extras)`` of its worlds."""
         return self._finish(k, self.worlds.wait(k))
 
+    def act_async(self, k: int, noise: np.ndarray) -> None:
+        """Start group ``k``'s act-and-step with the policy installed in its process
+        (:mod:`crowdbench.training.acting`) and its worlds' Gaussian noise ``(n_k, 2)``."""
+        self.worlds.send_act_step(k, noise, self.episode_length_buf[self.groups[k]].numpy(), self.curriculum.rho)
+
+    def act_wait(self, k: int):
+        """Finish group ``k``'s act-and-step: ``(obs, rewards, dones, extras, record, next_state)``."""
+        out, record, state = self.worlds.wait(k)
+        return (*self._finish(k, out), record, state)
+
     def close(self) -> None:
         """Stop the worker processes (if any)."""
         self.worlds.close()

@@ -106,6 +106,51 @@ def test_pipelined_collection_writes_the_same_transitions():
         assert torch.allclose(a[key], b[key], atol=1e-5), key
 
 
+def test_worker_acting_is_the_trainers_policy_for_any_process_count(tmp_path):
+    """With the world processes acting, the stored transitions are the same for 1 and 2 processes, and every
+    stored value, mean and log-probability is what the training process's own network gives for the stored
+    observation and recurrent state (the policy snapshot is exact, recurrent states carry over and reset)."""
+    from crowdbench.training.train import TrainConfig, Trainer
+
+    stores = []
+    for processes in (1, 2):
+        cfg = TrainConfig(num_envs=16, steps_per_env=40, d_model=16, heads=2, ffn=16, gru_hidden=16,
+                          head_dims=(16,), humans_range=(15, 25), eval_every=0, env_processes=processes, threads=1)
+        assert cfg.worker_acting
+        tr = Trainer(cfg, str(tmp_path / str(processes)), quiet=True)
+        try:
+            torch.manual_seed(5)
+            tr.env.episode_length_buf[:] = torch.arange(150, 198, 3)  # time-outs and restarts inside the rollout
+            with torch.inference_mode():
+                collect(tr.alg, tr.env, tr.env.get_observations(), 20, worker_acting=True)  # states carry over
+                tr.alg.storage.clear()
+                obs, _, _ = collect(tr.alg, tr.env, tr.env.get_observations(), 20, worker_acting=True)
+            st = tr.alg.storage
+            stores.append({"obs": st.observations["humans"].clone(), "actions": st.actions.clone(),
+                           "rewards": st.rewards.clone(), "dones": st.dones.clone(), "values": st.values.clone(),
+                           "logp": st.actions_log_prob.clone(), "mu": st.distribution_params[0].clone(),
+                           "hidden": st.saved_hidden_state_a[0].clone(), "h": tr.alg.actor.rnn.hidden_state.clone()})
+            ended = st.dones[:-1, :, 0].bool()  # an episode ended at step t: its world starts t + 1 from zero
+            assert ended.any() and st.saved_hidden_state_a[0][1:][:, 0][ended].abs().max() == 0
+            actor, critic = tr.alg.actor, tr.alg.critic
+            with torch.inference_mode():
+                for t in range(20):
+                    actor.rnn.hidden_state = st.saved_hidden_state_a[0][t].clone()
+                    o = st.observations[t]
+                    actor(o, stochastic_output=True)
+                    assert torch.allclose(actor.output_mean, st.distribution_params[0][t], atol=1e-5)
+                    assert torch.allclose(critic(o), st.values[t], atol=1e-5)
+                    logp = actor.get_output_log_prob(st.actions[t])
+                    assert torch.allclose(logp, st.actions_log_prob[t].squeeze(-1), atol=1e-4)
+        finally:
+            tr.close()
+    a, b = stores
+    assert a["dones"].sum() >= 3, int(a["dones"].sum())
+    assert a["hidden"].abs().sum() > 0
+    for key in a:
+        assert torch.allclose(a[key], b[key], atol=1e-5), key
+
+
 def test_data_parallel_update_matches_one_thread(tmp_path):
     """In PPO updates with 2 threads the whole network (encoder, GRU, actor and value heads) runs split by
     environment; the mini-batch's means, values and gradients equal the one-thread path's (episodes end inside the
