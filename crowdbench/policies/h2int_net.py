@@ -26,9 +26,9 @@ from rsl_rl.models import MLPModel
 from rsl_rl.modules import RNN, EmpiricalNormalization
 from tensordict import TensorDict
 
-from crowdbench.policies import packed
+from crowdbench.policies import packed, parallel_ppo
 from crowdbench.policies.buckets import INFERENCE_OVERHEAD, TRAIN_OVERHEAD, last_column, partition
-from crowdbench.policies.parallel import parallel_map, trajectory_shares
+from crowdbench.policies.parallel import parallel_map
 
 VARIANTS = ("h2int", "flat", "meanpool", "standard")
 EDGE_SCALE = 5.0
@@ -177,7 +177,6 @@ class H2INTActor(MLPModel):
         self.encoder = H2INTEncoder(n_max, variant, d_model, heads, ffn)
         self.rnn = RNN(d_model, gru_hidden, 1, "gru")
         self._cache: tuple | None = None
-        self._value: tuple | None = None  # (obs, value) of the parallel update path, taken by the critic
         self._critic_head: nn.Module | None = None  # the critic's value MLP (a reference, not a submodule)
         self.threads = 1
         """CPU threads the encoder splits a batch across (set by the trainer; not saved)."""
@@ -288,50 +287,6 @@ class H2INTActor(MLPModel):
               threads: int | None = None) -> torch.Tensor:
         return self.rnn(self.encode(obs, masks, threads), masks, hidden_state).squeeze(0)
 
-    def forward(self, obs: TensorDict, masks: torch.Tensor | None = None, hidden_state=None,
-                stochastic_output: bool = False) -> torch.Tensor:
-        """rsl-rl's ``MLPModel.forward``; in PPO updates (trajectories given, gradients on, ``threads > 1``, a
-        critic bound) the whole network — encoder, GRU, actor head *and* the critic's value head — runs data-parallel
-        by environment (:meth:`_parallel_heads`), and the value waits for :meth:`H2INTCritic.forward`."""
-        self._value = None
-        if masks is None or self.threads < 2 or self._critic_head is None or not torch.is_grad_enabled():
-            return super().forward(obs, masks, hidden_state, stochastic_output)
-        out = self._parallel_heads(obs, masks, hidden_state)
-        mean = out[..., :-1]
-        self._cache = None
-        self._value = (obs, out[..., -1:])
-        if self.distribution is None:
-            return mean
-        if stochastic_output:
-            self.distribution.update(mean)
-            return self.distribution.sample()
-        return self.distribution.deterministic_output(mean)
-
-    def _parallel_heads(self, obs: TensorDict, masks: torch.Tensor, hidden_state: torch.Tensor) -> torch.Tensor:
-        """``cat([actor head, value head](trunk))`` ``(T, B, A + 1)`` for a recurrent mini-batch (padded
-        trajectories ``obs`` ``(T, J, ·)``, ``masks`` ``(T, J)``, ``hidden_state`` ``(1, J, H)``; ``B`` environments),
-        the environments split across ``self.threads`` threads with equal token counts; forward and backward in the
-        threads (:func:`crowdbench.policies.parallel.parallel_map`). The same function as the one-thread path, to
-        float rounding."""
-        T = masks.shape[0]
-        tokens = ((obs["mask"] > 0.5).sum(-1) + 1) * masks  # (T, J): the encoder's work
-        trajs, envs = trajectory_shares(masks, tokens.sum(0), self.threads)
-        head = self._critic_head
-        steps = torch.arange(T)
-
-        def run(k: int) -> torch.Tensor:  # share k's rows, environment-major: (b·T, A + 1)
-            j = trajs[k]
-            sub = {key: obs[key][:, j] for key in ("robot", "humans", "mask")}
-            latent = self.trunk(sub, masks[:, j], hidden_state[:, j], threads=1)
-            y = torch.cat([self.mlp(latent), head(latent)], -1)  # (T, b, A + 1)
-            return y.transpose(0, 1).reshape(-1, y.shape[-1])
-
-        rows = [(e[:, None] * T + steps).reshape(-1) for e in envs]
-        n_env = sum(int(e.shape[0]) for e in envs)
-        params = [*self.parameters(), *head.parameters()]
-        out = parallel_map(params, run, rows, n_env * T)
-        return out.view(n_env, T, -1).transpose(0, 1)
-
     def get_latent(self, obs, masks=None, hidden_state=None):
         latent = self.trunk(obs, masks, hidden_state)
         self._cache = (obs, latent)
@@ -367,16 +322,7 @@ class H2INTCritic(MLPModel):
         self.latent_dim = actor.latent_dim
         super().__init__(obs, obs_groups, obs_set, output_dim, hidden_dims, activation, False, None)
         object.__setattr__(self, "_actor", actor)  # a reference, not a submodule: parameters are not duplicated
-        object.__setattr__(actor, "_critic_head", self.mlp)  # for the actor's data-parallel update path
-
-    def forward(self, obs: TensorDict, masks: torch.Tensor | None = None, hidden_state=None,
-                stochastic_output: bool = False) -> torch.Tensor:
-        """The value computed by the actor's data-parallel update path for this observation object (taken once), or
-        rsl-rl's ``MLPModel.forward`` on the shared trunk."""
-        value, self._actor._value = self._actor._value, None
-        if value is not None and value[0] is obs:
-            return value[1]
-        return super().forward(obs, masks, hidden_state, stochastic_output)
+        object.__setattr__(actor, "_critic_head", self.mlp)  # for crowdbench.policies.parallel_ppo
 
     def _get_obs_dim(self, obs, obs_groups, obs_set):
         return ["robot", "humans", "mask"], 9
@@ -402,7 +348,16 @@ class H2INTCritic(MLPModel):
 
 
 class SharedTrunkPPO(PPO):
-    """rsl-rl PPO whose critic is an :class:`H2INTCritic` on the actor's trunk."""
+    """rsl-rl PPO whose critic is an :class:`H2INTCritic` on the actor's trunk. With ``parallel_update`` set (the
+    trainer sets it) and the actor on several threads, :meth:`update` runs whole mini-batches — forward, losses,
+    backward — per thread (:mod:`crowdbench.policies.parallel_ppo`)."""
+
+    parallel_update = False
+
+    def update(self) -> dict[str, float]:
+        if self.parallel_update and parallel_ppo.applies(self):
+            return parallel_ppo.update(self)
+        return super().update()
 
     @staticmethod
     def construct_algorithm(obs, env, cfg, device):

@@ -23,7 +23,8 @@ _POOLS: dict[int, ThreadPoolExecutor] = {}
 _LOCK = threading.Lock()
 
 
-def _pool(threads: int) -> ThreadPoolExecutor:
+def pool(threads: int) -> ThreadPoolExecutor:
+    """The process's pool of ``threads`` worker threads (one intra-op torch thread each), created once."""
     with _LOCK:
         if threads not in _POOLS:
             _POOLS[threads] = ThreadPoolExecutor(threads, thread_name_prefix="crowdbench-dp",
@@ -46,7 +47,7 @@ class _Shares(torch.autograd.Function):
             with torch.enable_grad():
                 return fn(k)
 
-        outs = list(_pool(len(shares)).map(run, range(len(shares))))
+        outs = list(pool(len(shares)).map(run, range(len(shares))))
         ctx.outs, ctx.shares, ctx.params = outs, shares, params
         return _assemble(shares, [o.detach() for o in outs], n)
 
@@ -57,7 +58,7 @@ class _Shares(torch.autograd.Function):
         def grad(k: int) -> Sequence[torch.Tensor | None]:
             return torch.autograd.grad(ctx.outs[k], params, gz[ctx.shares[k]], allow_unused=True)
 
-        parts = list(_pool(len(ctx.shares)).map(grad, range(len(ctx.shares))))
+        parts = list(pool(len(ctx.shares)).map(grad, range(len(ctx.shares))))
         ctx.outs = ctx.params = None
         return (None, None, None, *[_sum(g) for g in zip(*parts, strict=True)])
 
@@ -93,7 +94,7 @@ def parallel_map(params: nn.Module | Sequence[torch.Tensor], fn: Fn, shares: Seq
         with torch.inference_mode(inference), torch.no_grad():
             return fn(k)
 
-    return _assemble(shares, list(_pool(len(shares)).map(run, range(len(shares)))), n)
+    return _assemble(shares, list(pool(len(shares)).map(run, range(len(shares)))), n)
 
 
 def balanced_shares(cost: torch.Tensor, threads: int) -> list[torch.Tensor]:

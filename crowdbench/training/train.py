@@ -84,6 +84,10 @@ class TrainConfig:
     """Encode packed tokens (:mod:`crowdbench.policies.packed`: valid tokens only, ragged attention) rather than
     padded groups; the same function to float rounding, ≈ 2× faster forward + backward. Checkpoints saved before this
     option resume with ``False``, bit for bit."""
+    parallel_update: bool = True
+    """PPO updates run each mini-batch's forward pass, losses and backward pass per thread
+    (:mod:`crowdbench.policies.parallel_ppo`; needs ``threads`` ≥ 2), not only the network; the same update to float
+    rounding. Checkpoints saved before this option resume with ``False``."""
     fused_adam: bool = True
     """Adam as one fused kernel per step (``torch.optim.Adam(fused=True)``: 0.25 against 1.15 ms per step here); the
     same update to float rounding. Checkpoints saved before this option resume with ``False``."""
@@ -102,13 +106,14 @@ class TrainConfig:
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> TrainConfig:
         """The configuration saved in a checkpoint (older checkpoints' ``update_threads`` becomes ``threads``; their
-        missing ``packed``, ``worker_acting`` and ``fused_adam`` mean ``False``)."""
+        missing ``packed``, ``worker_acting``, ``fused_adam`` and ``parallel_update`` mean ``False``)."""
         d = dict(d)
         if "update_threads" in d:
             d["threads"] = d.pop("update_threads")
         d.setdefault("packed", False)  # saved before packed encoding existed: keep their exact resume
         d.setdefault("worker_acting", False)  # likewise
         d.setdefault("fused_adam", False)  # likewise
+        d.setdefault("parallel_update", False)  # likewise
         for key in ("humans_range", "head_dims"):
             if key in d:
                 d[key] = tuple(d[key])
@@ -172,6 +177,7 @@ class Trainer:
         self.runner = OnPolicyRunner(self.env, cfg.rsl_cfg(), log_dir=None)
         self.alg = self.runner.alg
         self.alg.actor.threads = cfg.threads
+        self.alg.parallel_update = cfg.parallel_update
         if cfg.fused_adam:  # the same parameters in the same order as rsl-rl's optimiser: same state_dict layout
             self.alg.optimizer = torch.optim.Adam([p for g in self.alg.optimizer.param_groups for p in g["params"]],
                                                   lr=cfg.learning_rate, fused=True)

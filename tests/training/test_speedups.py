@@ -151,45 +151,54 @@ def test_worker_acting_is_the_trainers_policy_for_any_process_count(tmp_path):
         assert torch.allclose(a[key], b[key], atol=1e-5), key
 
 
-def test_data_parallel_update_matches_one_thread(tmp_path):
-    """In PPO updates with 2 threads the whole network (encoder, GRU, actor and value heads) runs split by
-    environment; the mini-batch's means, values and gradients equal the one-thread path's (episodes end inside the
-    rollout, so environments hold several trajectories)."""
+def test_per_thread_ppo_update_equals_rsl_rl_update(tmp_path):
+    """crowdbench.policies.parallel_ppo (forward, PPO losses and backward per thread) leaves the networks, the
+    optimiser, the adaptive learning rate and the reported losses as rsl-rl's PPO.update does, to float rounding."""
+    import copy
+
+    from crowdbench.policies import parallel_ppo
     from crowdbench.policies.parallel import trajectory_shares
     from crowdbench.training.train import TrainConfig, Trainer
 
     cfg = TrainConfig(num_envs=16, steps_per_env=40, d_model=16, heads=2, ffn=16, gru_hidden=16, head_dims=(16,),
-                      humans_range=(15, 25), eval_every=0, env_processes=1, threads=1, mini_batches=2)
+                      humans_range=(15, 25), eval_every=0, env_processes=1, threads=2, mini_batches=2, epochs=2,
+                      desired_kl=1e-4)  # a tiny KL target: the learning rate adapts within the update
     tr = Trainer(cfg, str(tmp_path), quiet=True)
     try:
         alg = tr.alg
-        tr.env.episode_length_buf[:] = torch.arange(150, 198, 3)  # time-outs inside the rollout
+        tr.env.episode_length_buf[:] = torch.arange(150, 198, 3)  # time-outs: several trajectories per world
         with torch.inference_mode():
             obs, _, _ = collect(alg, tr.env, tr.env.get_observations(), cfg.steps_per_env)
             alg.compute_returns(obs)
+        assert parallel_ppo.applies(alg)
         batch = next(alg.storage.recurrent_mini_batch_generator(2, 1))
-        assert batch.masks.shape[1] > 8  # more trajectories than the mini-batch's 8 environments
+        assert batch.masks.shape[1] > 8  # more trajectories than the mini-batch's 8 worlds
         trajs, envs = trajectory_shares(batch.masks, torch.ones(batch.masks.shape[1]), 2)
         assert sorted(torch.cat(envs).tolist()) == list(range(8))
         assert sorted(torch.cat(trajs).tolist()) == list(range(batch.masks.shape[1]))
-        params = [*alg.actor.parameters(), *alg.critic.parameters()]
+        start = copy.deepcopy((alg.actor.state_dict(), alg.critic.state_dict(), alg.optimizer.state_dict(),
+                               alg.learning_rate, alg.storage))
+        before = [p.detach().clone() for p in (*alg.actor.parameters(), *alg.critic.parameters())]
         results = []
-        for threads in (1, 2):
-            alg.actor.threads = threads
-            alg.optimizer.zero_grad()
-            alg.actor(batch.observations, masks=batch.masks, hidden_state=batch.hidden_states[0],
-                      stochastic_output=True)
-            logp = alg.actor.get_output_log_prob(batch.actions)
-            values = alg.critic(batch.observations, masks=batch.masks, hidden_state=batch.hidden_states[1])
-            (logp.sum() + values.square().sum()).backward()
-            results.append((alg.actor.output_mean.detach(), values.detach(),
-                            [p.grad.clone() for p in params if p.grad is not None]))
-        (m1, v1, g1), (m2, v2, g2) = results
-        assert m1.shape == (cfg.steps_per_env, 8, 2) and v1.shape == (cfg.steps_per_env, 8, 1)
-        assert torch.allclose(m1, m2, atol=1e-6) and torch.allclose(v1, v2, atol=1e-6)
-        assert len(g1) == len(g2) > 20
-        for a, b in zip(g1, g2, strict=True):
-            assert (a - b).norm() <= 1e-5 * a.norm() + 1e-7
+        for parallel in (True, False):
+            alg.actor.load_state_dict(start[0])
+            alg.critic.load_state_dict(start[1])
+            alg.optimizer.load_state_dict(start[2])
+            alg.learning_rate = start[3]
+            for group in alg.optimizer.param_groups:
+                group["lr"] = start[3]
+            alg.storage = copy.deepcopy(start[4])
+            alg.parallel_update = parallel
+            losses = alg.update()
+            results.append((losses, alg.learning_rate, [p.detach().clone() for p in alg.actor.parameters()]
+                            + [p.detach().clone() for p in alg.critic.parameters()]))
+        (l1, lr1, p1), (l2, lr2, p2) = results
+        assert lr1 == lr2 != start[3]
+        for key in ("value", "surrogate", "entropy"):
+            assert abs(l1[key] - l2[key]) <= 1e-5 * max(1.0, abs(l2[key])), key
+        assert max(float((a - b).abs().max()) for a, b in zip(p2, before, strict=True)) > 1e-4  # it did learn
+        for a, b in zip(p1, p2, strict=True):
+            assert torch.allclose(a, b, atol=1e-5), (a - b).abs().max()
     finally:
         tr.close()
 
