@@ -51,12 +51,12 @@ def main() -> None:
             path = "packed_encode" if actor.packed else "bucketed"  # the encoder entry point training uses
             encoder = getattr(actor, path)
 
-            def stub(r, e, v, max_groups=8):  # noqa: ARG001 - a cheap stand-in with the encoder's output shape
+            def stub(r, e, v, max_groups=8, threads=None):  # noqa: ARG001 - a cheap stand-in with the encoder's output shape
                 return actor.encoder.final_ln(actor.encoder.robot_mlp(r))
             for _ in range(args.repeats):
                 t = time.perf_counter()
                 with torch.inference_mode():
-                    obs, _, _ = collect(alg, env, obs, cfg.steps_per_env)
+                    obs, _, _ = collect(alg, env, obs, cfg.steps_per_env, cfg.worker_acting)
                     alg.compute_returns(obs)
                 rollout.append(time.perf_counter() - t)
                 stored = copy.deepcopy(alg.storage)
@@ -88,7 +88,8 @@ def main() -> None:
     print(f"# H²INT training iteration breakdown ({machine()})")
     print(f"schedule {cfg.epochs} epochs × {cfg.mini_batches} mini-batches, {n:,} transitions per iteration, "
           f"{cfg.threads} threads, {cfg.env_processes} world processes, encoder path: {path}")
-    print(f"rollout (pipelined, incl. returns)   {_stats(rollout)}")
+    how = "world processes acting" if cfg.worker_acting else "pipelined"
+    print(f"rollout ({how}, incl. returns)       {_stats(rollout)}")
     print(f"PPO update                           {_stats(update)}")
     print(f"  of which not the encoder           {_stats(serial)}")
     total = statistics.median(rollout) + statistics.median(update)

@@ -77,9 +77,10 @@ class TrainConfig:
     (:mod:`crowdbench.policies.parallel`). Deterministic for a given count; other counts differ in the last bits of
     the gradient sums."""
     env_processes: int = 2
-    """1: the worlds step in the training process. k ≥ 2: k worker processes step k groups of worlds while this
-    process computes the next group's actions (:mod:`crowdbench.training.rollout`) — the same transitions, computed in
-    another order (the network's batches differ, so results differ from ``1`` in the last bits)."""
+    """1: the worlds step in the training process. k ≥ 2: k worker processes step k groups of worlds and, with
+    ``worker_acting``, compute their actions (:mod:`crowdbench.training.acting`); without it, this process computes
+    one group's actions while the others step (:mod:`crowdbench.training.rollout`). The same transitions either way,
+    computed in another order (the network's batches differ, so results differ from ``1`` in the last bits)."""
     packed: bool = True
     """Encode packed tokens (:mod:`crowdbench.policies.packed`: valid tokens only, ragged attention) rather than
     padded groups; the same function to float rounding, ≈ 2× faster forward + backward. Checkpoints saved before this
