@@ -1,13 +1,14 @@
 """rsl-rl's PPO update with each mini-batch's forward pass, losses and backward pass run per thread.
 
-:meth:`H2INTActor._parallel_heads <crowdbench.policies.h2int_net.H2INTActor._parallel_heads>` already splits the
-network's forward and backward across threads, but hands control back to the main thread in between: rsl-rl's loss
-code and the autograd plumbing run there, on one core, twice per mini-batch. Here every thread takes its share of the
-mini-batch's environments (equal token counts, :func:`~crowdbench.policies.parallel.trajectory_shares`) through the
-network, the PPO losses and ``torch.autograd.grad`` in one go; the main thread sums the shares' gradients (in share
-order: deterministic), adapts the learning rate from the KL divergence, clips and steps — exactly the steps of
-``rsl_rl.algorithms.PPO.update`` (rsl-rl 5.5), whose losses are means over the mini-batch and therefore sums of
-per-share sums over its size. Equal to rsl-rl's update to float rounding (tested).
+rsl-rl's ``PPO.update`` runs the network, the PPO losses and ``loss.backward()`` on one thread; splitting only the
+encoder across threads (:meth:`H2INTActor.packed_encode <crowdbench.policies.h2int_net.H2INTActor.packed_encode>`)
+leaves the GRU, the heads, the losses and the autograd plumbing on one core, twice per mini-batch. Here every thread
+takes its share of the mini-batch's environments (equal token counts,
+:func:`~crowdbench.policies.parallel.trajectory_shares`) through the network, the PPO losses and
+``torch.autograd.grad`` in one go; the main thread sums the shares' gradients (in share order: deterministic), adapts
+the learning rate from the KL divergence, clips and steps — exactly the steps of ``rsl_rl.algorithms.PPO.update``
+(rsl-rl 5.5), whose losses are means over the mini-batch and therefore sums of per-share sums over its size. Equal to
+rsl-rl's update to float rounding (tested). Measured in training: the threads hold 92–94 % of the update's time.
 
 Covers what crowdbench trains: recurrent shared-trunk actor/critic, Gaussian policy with a state-independent std,
 no RND, no symmetry, no mixed precision, one process, advantages normalised per rollout. :func:`applies` says when.
