@@ -99,6 +99,18 @@ def _gate(x, yv, rows, w, u, ug, bg, zero, gw, gu, gg, out):  # pragma: no cover
             out[t, i] = (_ONE - z) * x[t, i] + z * _tanh(gw[t, 2 * d + i] + gg[t, i])
 
 
+@nb.njit(inline="always", fastmath=_FM, error_model="numpy")
+def _residual(x, yv, rows, gated, w, u, ug, bg, zero, gw, gu, gg, out):  # pragma: no cover - numba
+    """A stage's residual connection on the first ``rows`` rows into ``out``: the GTrXL gate ``g(x, yv)`` when
+    ``gated`` (weights ``w``, ``u``, ``ug``, ``bg``; unused otherwise), else ``x + yv``."""
+    if gated:
+        _gate(x, yv, rows, w, u, ug, bg, zero, gw, gu, gg, out)
+        return
+    for t in range(rows):
+        for i in range(x.shape[1]):
+            out[t, i] = x[t, i] + yv[t, i]
+
+
 @nb.njit(cache=True, nogil=True, fastmath=_FM, error_model="numpy")
 def _encode(robot, edges, valid, buf, offs, shapes, d, heads, ffn, n_stages, gated, edge_scale, norm_eps, ln_eps,
             out):  # pragma: no cover - numba
@@ -184,29 +196,18 @@ def _encode(robot, edges, valid, buf, offs, shapes, d, heads, ffn, n_stages, gat
                             acc += sc[j] * qkv[j, 2 * d + c0 + c]
                         att[qi, c0 + c] = acc * inv
             _lin(att, nq, p(base + 4), p(base + 5)[0], a)
-            if gated:
-                _gate(x, a, nq, p(base + 6), p(base + 7), p(base + 8), p(base + 9)[0], zero, gw, gu, gg, y)
-            else:
-                for t in range(nq):
-                    for i in range(d):
-                        y[t, i] = x[t, i] + a[t, i]
+            _residual(x, a, nq, gated, p(base + 6), p(base + 7), p(base + 8), p(base + 9)[0], zero, gw, gu, gg, y)
             _ln(y, nq, p(base + 10)[0], p(base + 11)[0], ln_eps, h)
             _lin(h, nq, p(base + 12), p(base + 13)[0], f1)
             for t in range(nq):
                 for i in range(ffn):
                     f1[t, i] = _gelu(f1[t, i])
             _lin(f1, nq, p(base + 14), p(base + 15)[0], f)
-            if gated:
-                _gate(y, f, nq, p(base + 16), p(base + 17), p(base + 18), p(base + 19)[0], zero, gw, gu, gg, x)
-            else:
-                for t in range(nq):
-                    for i in range(d):
-                        x[t, i] = y[t, i] + f[t, i]
+            _residual(y, f, nq, gated, p(base + 16), p(base + 17), p(base + 18), p(base + 19)[0], zero, gw, gu, gg,
+                      x)
         _ln(x, 1, fw[0], fb[0], ln_eps, h)
         for i in range(d):
             out[b, i] = h[0, i]
-
-
 
 
 def _tensors(enc: nn.Module) -> list[torch.Tensor]:

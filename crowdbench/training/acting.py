@@ -30,10 +30,10 @@ from typing import Any
 import numpy as np
 import torch
 import torch.nn as nn
-from rsl_rl.storage import RolloutStorage
 from tensordict import TensorDict
 
 from crowdbench.policies import fused_infer, packed
+from crowdbench.training.rollout import store_step
 
 
 def supported(actor: nn.Module) -> bool:
@@ -109,31 +109,10 @@ def collect_worker_acting(alg: Any, env: Any, obs: TensorDict, steps: int) -> tu
             o, rew, dones, extras, record, state[k] = env.act_wait(k)
             if t + 1 < steps:
                 env.act_async(k, noise[t + 1, sl])
-            parts.append((current[k], record, rew, dones, extras["time_outs"]))
+            part = {key: torch.from_numpy(v) for key, v in record.items()}
+            part["dist"] = (part.pop("mean"), part.pop("std"))
+            parts.append({**part, "obs": current[k], "rewards": rew, "dones": dones, "time_outs": extras["time_outs"]})
             current[k] = o
-        rewards.append(_add(alg, parts))
+        rewards.append(store_step(alg, parts))
     alg.actor.rnn.hidden_state = torch.from_numpy(np.concatenate(state, 1))
     return torch.cat(current, 0), extras, rewards
-
-
-def _add(alg: Any, parts: list[tuple]) -> float:
-    """rsl-rl's ``act`` + ``process_env_step`` record for one step of every group; returns its mean reward."""
-    def cat(arrays: list[np.ndarray], dim: int = 0) -> torch.Tensor:
-        return torch.from_numpy(np.concatenate(arrays, dim))
-
-    t = RolloutStorage.Transition()
-    t.observations = torch.cat([p[0] for p in parts], 0)
-    rec = [p[1] for p in parts]
-    t.actions = cat([r["actions"] for r in rec])
-    t.values = cat([r["values"] for r in rec])
-    t.actions_log_prob = cat([r["logp"] for r in rec])
-    t.distribution_params = (cat([r["mean"] for r in rec]), cat([r["std"] for r in rec]))
-    h = cat([r["hidden"] for r in rec], 1)
-    t.hidden_states = (h, h)  # the critic's state is the actor's (shared trunk)
-    rewards = torch.cat([p[2] for p in parts])
-    t.rewards = rewards.clone()
-    t.dones = torch.cat([p[3] for p in parts])
-    time_outs = torch.cat([p[4] for p in parts])
-    t.rewards += alg.gamma * torch.squeeze(t.values * time_outs.unsqueeze(1), 1)  # bootstrapping on time-outs
-    alg.storage.add_transition(t)
-    return float(rewards.mean())

@@ -19,7 +19,6 @@ import torch
 from rsl_rl.storage import RolloutStorage
 from tensordict import TensorDict
 
-from crowdbench.training import acting
 from crowdbench.training.vecenv import CrowdVecEnv
 
 
@@ -31,8 +30,11 @@ def collect(alg: Any, env: CrowdVecEnv, obs: TensorDict, steps: int, worker_acti
     supports it). Returns the observations after the last step, the last step's ``extras`` and the mean reward of
     every step.
     """
-    if worker_acting and acting.supported(alg.actor):
-        return acting.collect_worker_acting(alg, env, obs, steps)
+    if worker_acting:
+        from crowdbench.training import acting  # (acting builds on this module)
+
+        if acting.supported(alg.actor):
+            return acting.collect_worker_acting(alg, env, obs, steps)
     if len(env.groups) == 1:
         rewards: list[float] = []
         extras: dict = {}
@@ -43,6 +45,28 @@ def collect(alg: Any, env: CrowdVecEnv, obs: TensorDict, steps: int, worker_acti
             rewards.append(float(rew.mean()))
         return obs, extras, rewards
     return _Pipeline(alg, env).run(obs, steps)
+
+
+def store_step(alg: Any, parts: list[dict[str, Any]]) -> float:
+    """rsl-rl's ``act`` + ``process_env_step`` record of one step of every world, assembled from the groups'
+    ``parts`` in world order (each: ``obs``, ``hidden`` state before acting, ``actions``, ``values``, ``logp``,
+    ``dist`` = (mean, std), ``rewards``, ``dones``, ``time_outs``); returns the step's mean reward."""
+    cat = torch.cat
+    t = RolloutStorage.Transition()
+    t.observations = cat([p["obs"] for p in parts], 0)
+    t.actions = cat([p["actions"] for p in parts])
+    t.values = cat([p["values"] for p in parts])
+    t.actions_log_prob = cat([p["logp"] for p in parts])
+    t.distribution_params = tuple(cat(ps) for ps in zip(*(p["dist"] for p in parts), strict=True))
+    h = cat([p["hidden"] for p in parts], 1)
+    t.hidden_states = (h, h)  # the critic's state is the actor's (shared trunk)
+    rewards = cat([p["rewards"] for p in parts])
+    t.rewards = rewards.clone()
+    t.dones = cat([p["dones"] for p in parts])
+    time_outs = cat([p["time_outs"] for p in parts])
+    t.rewards += alg.gamma * torch.squeeze(t.values * time_outs.unsqueeze(1), 1)  # bootstrapping on time-outs
+    alg.storage.add_transition(t)
+    return float(rewards.mean())
 
 
 class _Pipeline:
@@ -68,23 +92,8 @@ class _Pipeline:
 
     def _add(self, parts: list[dict[str, Any]], results: list[tuple]) -> float:
         """``alg.process_env_step`` for one full step assembled from the groups; returns its mean reward."""
-        alg = self.alg
-        t = RolloutStorage.Transition()
-        cat = torch.cat
-        t.observations = cat([p["obs"] for p in parts], 0)
-        t.actions = cat([p["actions"] for p in parts])
-        t.values = cat([p["values"] for p in parts])
-        t.actions_log_prob = cat([p["logp"] for p in parts])
-        t.distribution_params = tuple(cat(ps) for ps in zip(*(p["dist"] for p in parts), strict=True))
-        h = cat([p["hidden"] for p in parts], 1)
-        t.hidden_states = (h, h)  # the critic's state is the actor's (shared trunk)
-        rewards = cat([r[0] for r in results])
-        t.rewards = rewards.clone()
-        t.dones = cat([r[1] for r in results])
-        time_outs = cat([r[2] for r in results])
-        t.rewards += alg.gamma * torch.squeeze(t.values * time_outs.unsqueeze(1), 1)  # bootstrapping on time-outs
-        alg.storage.add_transition(t)
-        return float(rewards.mean())
+        return store_step(self.alg, [{**p, "rewards": r[0], "dones": r[1], "time_outs": r[2]}
+                                     for p, r in zip(parts, results, strict=True)])
 
     def _finish(self, k: int, obs: list[TensorDict], results: list) -> dict:
         o, rew, dones, extras = self.env.step_wait(k)
