@@ -97,16 +97,16 @@ def parallel_map(params: nn.Module | Sequence[torch.Tensor], fn: Fn, shares: Seq
     return _assemble(shares, list(pool(len(shares)).map(run, range(len(shares)))), n)
 
 
-def balanced_shares(cost: torch.Tensor, threads: int) -> list[torch.Tensor]:
-    """Split items of ``cost`` ``(n,)`` into ``threads`` shares of nearly equal total cost (greedy: costliest item
-    to the lightest share), each share's indices ascending. Deterministic (ties go to the lower share)."""
+def balanced_owners(cost: torch.Tensor, threads: int) -> torch.Tensor:
+    """The share ``(n,)`` each of the items of ``cost`` ``(n,)`` goes to, so that the ``threads`` shares' total costs
+    are nearly equal (greedy: costliest item to the lightest share). Deterministic (ties go to the lower share)."""
     owner = torch.empty(cost.shape[0], dtype=torch.long)
     load = [0.0] * threads
     for i in torch.argsort(cost, descending=True, stable=True).tolist():
         k = min(range(threads), key=load.__getitem__)
         owner[i] = k
         load[k] += float(cost[i])
-    return [torch.nonzero(owner == k).squeeze(1) for k in range(threads)]
+    return owner
 
 
 def trajectory_shares(masks: torch.Tensor, cost: torch.Tensor, threads: int
@@ -122,10 +122,7 @@ def trajectory_shares(masks: torch.Tensor, cost: torch.Tensor, threads: int
     lengths = masks.sum(0)
     env_of = torch.div(torch.cumsum(lengths, 0) - lengths, T, rounding_mode="floor")  # (J,)
     n_env = int(env_of[-1]) + 1 if env_of.numel() else 0
-    env_cost = torch.zeros(n_env, dtype=torch.float64).index_add_(0, env_of, cost.double())
-    envs = balanced_shares(env_cost, threads)
-    owner = torch.empty(n_env, dtype=torch.long)
-    for k, e in enumerate(envs):
-        owner[e] = k
+    owner = balanced_owners(torch.zeros(n_env, dtype=torch.float64).index_add_(0, env_of, cost.double()), threads)
     traj_owner = owner[env_of]
-    return [torch.nonzero(traj_owner == k).squeeze(1) for k in range(threads)], envs
+    return ([torch.nonzero(traj_owner == k).squeeze(1) for k in range(threads)],
+            [torch.nonzero(owner == k).squeeze(1) for k in range(threads)])
