@@ -10,9 +10,9 @@ Here every world process holds a copy of the policy (:class:`RolloutPolicy`: the
 Gaussian, and the critic's value head — pickled with their current weights before every rollout) and the recurrent
 state of its own worlds, and each step *acts and then steps* its worlds without waiting for anyone. The encoder runs
 as one numba kernel (:mod:`crowdbench.policies.fused_infer`), which loses less to the physics step evicting the
-caches than PyTorch's operators do. The training
-process only hands out, per step and group, the Gaussian noise and the curriculum's current ρ, and files the
-transitions into rsl-rl's storage.
+caches than PyTorch's operators do. The training process only hands out, per step and group, the Gaussian noise and
+the curriculum's current ρ, and files the transitions into rsl-rl's storage
+(:func:`~crowdbench.training.rollout.store_step`, shared with the pipelined rollout).
 
 The numbers do not depend on how the worlds are split: the noise of the whole rollout is drawn at its start from the
 training process's torch generator, ``randn(steps, num_envs, 2)``, and action = mean + std · noise, so any number of
