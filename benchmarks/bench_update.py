@@ -3,11 +3,11 @@ cost per sample-pass — the quantities that decide ``train_steps_per_s`` (see R
 
     python benchmarks/bench_update.py [--epochs 4] [--mini-batches 4] [--repeats 5]
 
-Two cores as in training (2 world processes, 2 threads). After two warm-up iterations from scratch, each repeat
-collects one rollout (8,192 transitions at the defaults) and runs one update on a copy of the same storage, then the
-same update with the encoder replaced by a cheap stand-in (so the difference is the encoder's forward and backward).
-Last, the encoder alone, forward + backward, on one mini-batch of that rollout with 1 and 2 threads. Medians and
-spreads (max - min) over the repeats.
+Two cores as in training (2 world processes that act and step, 2 threads in the update). After two warm-up
+iterations from scratch, each repeat collects one rollout (8,192 transitions at the defaults) and runs one update on
+a copy of the same storage, then the same update with the encoder replaced by a cheap stand-in (so the difference is
+the encoder's forward and backward). Last, the packed encoder alone, forward + backward, on one mini-batch of that
+rollout, one thread. Medians and spreads (max - min) over the repeats.
 """
 
 from __future__ import annotations
@@ -21,8 +21,9 @@ import time
 import torch
 from common import machine
 
-from crowdbench.training.rollout import collect
-from crowdbench.training.train import TrainConfig, Trainer
+from crowdbench.training.config import TrainConfig
+from crowdbench.training.rollout import PolicySnapshot, collect
+from crowdbench.training.trainer import Trainer
 
 
 def _stats(xs: list[float]) -> str:
@@ -42,29 +43,28 @@ def main() -> None:
         tr = Trainer(cfg, tmp, quiet=True)
         try:
             alg, env = tr.alg, tr.env
-            tr.cfg.iterations = 2  # warm-up: numba compilation, TorchScript profiling runs
-            tr.train()
+            tr.train(stop_at=2)  # warm-up: numba compilation, allocator
             obs = env.get_observations()
             alg.train_mode()
             rollout, update, serial = [], [], []
             actor = alg.actor
-            path = "packed_encode" if actor.packed else "bucketed"  # the encoder entry point training uses
-            encoder = getattr(actor, path)
+            enc = actor.encoder
 
-            def stub(r, e, v, max_groups=8, threads=None):  # noqa: ARG001 - a cheap stand-in with the encoder's output shape
-                return actor.encoder.final_ln(actor.encoder.robot_mlp(r))
+            def stub(o):  # a cheap stand-in with the encoder's output shape
+                return enc.final_ln(enc.robot_mlp(o["robot"]))
+
             for _ in range(args.repeats):
                 t = time.perf_counter()
                 with torch.inference_mode():
-                    obs, _, _ = collect(alg, env, obs, cfg.steps_per_env, cfg.worker_acting)
+                    obs, _, _ = collect(alg, env, obs, cfg.steps_per_env, PolicySnapshot.of(alg, tr.build))
                     alg.compute_returns(obs)
                 rollout.append(time.perf_counter() - t)
                 stored = copy.deepcopy(alg.storage)
-                setattr(actor, path, stub)
+                actor.encode_samples = stub
                 t = time.perf_counter()
                 alg.update()
                 serial.append(time.perf_counter() - t)
-                setattr(actor, path, encoder)
+                del actor.encode_samples
                 alg.storage = copy.deepcopy(stored)
                 t = time.perf_counter()
                 alg.update()
@@ -72,33 +72,24 @@ def main() -> None:
             batch = n // cfg.mini_batches
             o = stored.observations.flatten(0, 1)[:batch]
             robot, edges, valid = o["robot"], o["humans"], o["mask"] > 0.5
-            per_pass = {}
-            for threads in (1, 2):
-                alg.actor.threads = threads
-                samples = []
-                for k in range(args.repeats + 2):
-                    t = time.perf_counter()
-                    encoder(robot, edges, valid).square().sum().backward()
-                    if k >= 2:
-                        samples.append((time.perf_counter() - t) / batch * 1e6)
-                per_pass[threads] = samples
-            alg.actor.threads = cfg.threads
+            per_pass = []
+            for k in range(args.repeats + 2):
+                t = time.perf_counter()
+                enc.packed(robot, edges, valid).square().sum().backward()
+                if k >= 2:
+                    per_pass.append((time.perf_counter() - t) / batch * 1e6)
         finally:
             tr.close()
     print(f"# H²INT training iteration breakdown ({machine()})")
     print(f"schedule {cfg.epochs} epochs × {cfg.mini_batches} mini-batches, {n:,} transitions per iteration, "
-          f"{cfg.threads} threads, {cfg.env_processes} world processes, encoder path: {path}")
-    how = "world processes acting" if cfg.worker_acting else "pipelined"
-    print(f"rollout ({how}, incl. returns)       {_stats(rollout)}")
+          f"{cfg.threads} threads, {cfg.env_processes} world processes")
+    print(f"rollout (world processes acting, incl. returns) {_stats(rollout)}")
     print(f"PPO update                           {_stats(update)}")
     print(f"  of which not the encoder           {_stats(serial)}")
     total = statistics.median(rollout) + statistics.median(update)
     print(f"iteration                            {total:8.3f} s  → {n / total:,.0f} env-steps/s (no evaluations)")
-    for threads, xs in per_pass.items():
-        print(f"encoder fwd+bwd, {batch:,}-sample mini-batch, {threads} thread(s): "
-              f"{statistics.median(xs):6.1f} µs per sample-pass [{max(xs) - min(xs):.1f}]")
-    need = (n / 5000 - statistics.median(rollout) - statistics.median(serial)) / (cfg.epochs * n) * 1e6
-    print(f"for 5,000 env-steps/s the encoder would need ≤ {need:.1f} µs per sample-pass on 2 threads")
+    print(f"packed encoder fwd+bwd, {batch:,}-sample mini-batch, 1 thread: "
+          f"{statistics.median(per_pass):6.1f} µs per sample-pass [{max(per_pass) - min(per_pass):.1f}]")
 
 
 if __name__ == "__main__":

@@ -7,7 +7,7 @@ Figures (medians of repeated runs, with the spread = max − min):
   length, so the congested crossing phase and goal renewals are included, not just the cheap first steps);
 * ``orca_agent_steps_per_s[N]`` — the ORCA kernel alone, 64 worlds of N agents, one core;
 * ``train_steps_per_s`` — H²INT PPO training end to end (rollout + update), default configuration (both cores:
-  two world processes with pipelined rollouts, two threads in the update), 10 iterations from scratch after 2 warm-up
+  two world processes that act and step, two threads in the update), 10 iterations from scratch after 2 warm-up
   iterations, evaluations off; ``train_steps_per_s_1_core`` — the same pinned to one core (one process, one thread);
 * ``h2int_inference_ms`` — one decision for one robot (encoder + GRU + head), CPU, one thread;
 * ``decision_ms[policy]`` — one decision of *every registered robot policy* in a 20-pedestrian crossing (policies
@@ -129,7 +129,8 @@ def train_steps_per_s(iterations: int, repeats: int, threads: int = 2,
     configuration apart from the speed settings given."""
     import tempfile
 
-    from crowdbench.training.train import TrainConfig, Trainer
+    from crowdbench.training.config import TrainConfig
+    from crowdbench.training.trainer import Trainer
 
     samples = []
     for r in range(repeats):
@@ -138,10 +139,8 @@ def train_steps_per_s(iterations: int, repeats: int, threads: int = 2,
                               threads=threads, env_processes=env_processes)
             tr = Trainer(cfg, tmp, quiet=True)
             try:
-                tr.cfg.iterations = 2  # warm-up (numba compilation, allocator)
-                tr.train()
+                tr.train(stop_at=2)  # warm-up (numba compilation, allocator)
                 steps0, t = tr.env_steps, time.perf_counter()
-                tr.cfg.iterations = iterations + 2
                 tr.train()
                 samples.append((tr.env_steps - steps0) / (time.perf_counter() - t))
             finally:
@@ -152,16 +151,17 @@ def train_steps_per_s(iterations: int, repeats: int, threads: int = 2,
 def h2int_inference_ms(repeats: int, checkpoint: str | None = None) -> dict[str, float]:
     import torch
 
+    from crowdbench import checkpoints
     from crowdbench.config import WorldConfig
-    from crowdbench.policies.h2int import DEFAULT_CHECKPOINT, H2INTPolicy, build_actor
-    from crowdbench.training.train import TrainConfig
+    from crowdbench.policies.h2int import H2INTConfig, H2INTPolicy
+    from crowdbench.policies.h2int.model import build_actor
 
     torch.set_num_threads(1)
-    path = checkpoint or DEFAULT_CHECKPOINT
+    path = checkpoints.resolve("h2int", checkpoint)
     if os.path.exists(path):
         policy = H2INTPolicy(WorldConfig(), checkpoint=path)
     else:  # untrained network of the default architecture: same cost
-        policy = H2INTPolicy(WorldConfig(), actor=build_actor(TrainConfig().model_cfg(), 30))
+        policy = H2INTPolicy(WorldConfig(), actor=build_actor(H2INTConfig(), 30))
     rng = np.random.default_rng(0)
     k = 12  # pedestrians in view
     obs = {"robot": rng.normal(size=(1, 9)).astype(np.float32),

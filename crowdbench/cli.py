@@ -28,12 +28,13 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--humans", type=int, default=20, help="number of pedestrians")
     p.add_argument("--human-model", default="responsive_orca", help=f"one of {HUMAN_MODELS.names()}")
     p.add_argument("--responsiveness", type=float, default=None, help="crowd mean ρ for responsive_orca")
-    p.add_argument("--policy", default="orca", help=f"robot policy, one of {POLICIES.names()}")
+    p.add_argument("--policy", default=None, help=f"robot policy (default orca), one of {POLICIES.names()}")
     p.add_argument("--seed", type=int, default=0)
 
 
 def demo(args: argparse.Namespace) -> int:
     """Run one episode with the chosen robot policy, print its outcome and write an animated GIF."""
+    args.policy = args.policy or "orca"
     from crowdbench.envs import CrowdParallelEnv
     from crowdbench.render import save_gif
 
@@ -58,14 +59,29 @@ def demo(args: argparse.Namespace) -> int:
     return 0
 
 
+def _policy(args: argparse.Namespace):
+    """The policy named positionally or by ``--policy`` (with ``--checkpoint`` for checkpoint-backed ones)."""
+    import inspect
+
+    name = args.policy_pos or args.policy
+    if args.policy_pos and args.policy not in (None, args.policy_pos):
+        raise ValueError(f"policy given twice ({args.policy_pos!r} and --policy {args.policy!r}); give one")
+    factory = POLICIES.get(name or "orca")
+    if args.checkpoint and "checkpoint" not in inspect.signature(factory).parameters:
+        raise ValueError(f"--checkpoint: policy {name!r} takes no checkpoint; checkpoint-backed policies: "
+                         + ", ".join(n for n in POLICIES.names() if n in CHECKPOINT_POLICIES))
+    return make_policy(name or "orca", **({"checkpoint": args.checkpoint} if args.checkpoint else {}))
+
+
+CHECKPOINT_POLICIES = ("h2int",)
+"""Registered policies known to take ``checkpoint=`` (listed in errors; any policy with the argument accepts it)."""
+
+
 def evaluate(args: argparse.Namespace) -> int:
     """Batched evaluation of a registered policy; prints the paper's six metrics (optionally writes JSON)."""
     from crowdbench.evaluation import run_episodes, summarize
 
-    kwargs = {"checkpoint": args.checkpoint} if args.checkpoint else {}
-    if args.checkpoint and args.policy != "h2int":
-        raise ValueError("--checkpoint applies to --policy h2int")
-    policy = make_policy(args.policy, **kwargs)
+    policy = _policy(args)
     eps = run_episodes(policy, args.episodes, seed=args.seed, num_worlds=args.worlds, layout=args.layout,
                        num_humans=args.humans, human_model=args.human_model,
                        human_model_kwargs=_model_kwargs(args.human_model, args.responsiveness))
@@ -79,33 +95,26 @@ def evaluate(args: argparse.Namespace) -> int:
 
 
 def train_cmd(args: argparse.Namespace) -> int:
-    """Train H²INT (or an ablation) with rsl-rl PPO; checkpoints, curve and logs go to ``--out``."""
-    import dataclasses
+    """Train a PPO method (H²INT or an ablation) with rsl-rl; checkpoints, curve and logs go to ``--out``."""
+    from crowdbench.training.config import RESUMABLE, TrainConfig
+    from crowdbench.training.methods import PPO_METHODS
+    from crowdbench.training.trainer import resume_config, train
 
-    from crowdbench.training.train import TrainConfig, train
-
-    if args.algo != "h2int":
-        raise ValueError(f"train: unknown algorithm {args.algo!r}; valid choices: h2int")
-    overrides = {"variant": args.variant, "seed": args.seed, "anneal": not args.no_anneal}
-    for name in ("iterations", "minutes", "envs", "threads", "env_processes", "epochs", "mini_batches",
-                 "until_success"):
-        value = getattr(args, name)
-        if value is not None:
-            overrides["num_envs" if name == "envs" else name] = value
-    if args.resume:
-        from crowdbench.policies.h2int import load_checkpoint
-
+    method = PPO_METHODS.get(args.algo)()  # unknown name: one error naming the valid ones
+    speed = {name: getattr(args, name) for name in RESUMABLE if getattr(args, name) is not None}
+    if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
         path = os.path.join(args.resume, "last.pt") if os.path.isdir(args.resume) else args.resume
-        # a resumed run keeps its configuration; only its budget and speed settings may change
-        cfg = TrainConfig.from_dict(load_checkpoint(path)["train_config"])
-        for name in ("iterations", "minutes", "threads", "env_processes", "until_success"):
-            if getattr(args, name) is not None:
-                cfg = dataclasses.replace(cfg, **{name: getattr(args, name)})
+        cfg = resume_config(path, **speed)
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
+        model = {"variant": args.variant} if args.variant is not None else None
+        overrides = {"method": args.algo, "model": model, "seed": args.seed, "anneal": not args.no_anneal, **speed}
+        for name in ("envs", "epochs", "mini_batches"):
+            if getattr(args, name) is not None:
+                overrides["num_envs" if name == "envs" else name] = getattr(args, name)
         cfg = TrainConfig(**overrides)
-        out = args.out or os.path.join("runs", f"{cfg.variant}-seed{cfg.seed}")
-    print(f"training {cfg.variant} seed={cfg.seed} → {out}")
+        out = args.out or os.path.join("runs", f"{method.label(cfg.model)}-seed{cfg.seed}")
+    print(f"training {cfg.method} ({method.label(cfg.model)}) seed={cfg.seed} → {out}")
     trainer = train(cfg, out, resume=args.resume)
     print(f"wrote {os.path.join(out, 'last.pt')} and {os.path.join(out, 'curve.png')} "
           f"({trainer.iteration} iterations, {trainer.env_steps:,} env steps, {trainer.elapsed / 60:.1f} min)")
@@ -114,7 +123,7 @@ def train_cmd(args: argparse.Namespace) -> int:
 
 def export_cmd(args: argparse.Namespace) -> int:
     """Export a checkpoint to TorchScript and ONNX (recurrent: hidden state in and out)."""
-    from crowdbench.policies.deploy import export_onnx, export_torchscript
+    from crowdbench.policies.h2int.export import export_onnx, export_torchscript
 
     os.makedirs(args.out, exist_ok=True)
     ts = export_torchscript(args.checkpoint, os.path.join(args.out, "policy.pt"))
@@ -134,7 +143,7 @@ def plot_cmd(args: argparse.Namespace) -> int:
 
 def curves_cmd(args: argparse.Namespace) -> int:
     """Compare training runs (history.json files) on one figure."""
-    from crowdbench.training.train import plot_evals, plot_runs, runs_table
+    from crowdbench.training.plots import plot_evals, plot_runs, runs_table
 
     (plot_evals if args.evals else plot_runs)(args.histories, args.out)
     print(f"wrote {args.out}")
@@ -162,9 +171,9 @@ def tables_cmd(args: argparse.Namespace) -> int:
     kwargs = {"checkpoint": args.checkpoint} if args.checkpoint else {}
     label = args.policy
     if args.policy == "h2int":
-        from crowdbench.policies.h2int import DEFAULT_CHECKPOINT, load_checkpoint
+        from crowdbench.policies.h2int.policy import load_actor
 
-        variant = load_checkpoint(args.checkpoint or DEFAULT_CHECKPOINT)["variant"]
+        variant = load_actor(args.checkpoint)[1]["variant"]
         label = "h2int" if variant == "h2int" else f"h2int-{variant}"
     results = leaderboard.evaluate_cells(args.policy, grid, args.episodes, args.seed, policy_kwargs=kwargs,
                                          label=label)
@@ -203,14 +212,17 @@ def main(argv: list[str] | None = None) -> int:
     p.set_defaults(func=demo)
     p = sub.add_parser("evaluate", help="batched evaluation of a robot policy")
     _common(p)
+    p.add_argument("policy_pos", nargs="?", default=None, metavar="POLICY",
+                   help="robot policy (same as --policy)")
     p.add_argument("--episodes", type=int, default=100)
     p.add_argument("--worlds", type=int, default=16, help="worlds stepped together")
     p.add_argument("--json", default=None, help="write the summary to this JSON file")
-    p.add_argument("--checkpoint", default=None, help="H²INT checkpoint to evaluate (with --policy h2int)")
+    p.add_argument("--checkpoint", default=None,
+                   help="checkpoint of a checkpoint-backed policy: a path or a shipped name (h2int: meanpool, ...)")
     p.set_defaults(func=evaluate)
-    p = sub.add_parser("train", help="train H²INT with rsl-rl PPO")
-    p.add_argument("algo", help="h2int")
-    p.add_argument("--variant", default="h2int", help="h2int, flat, meanpool or standard")
+    p = sub.add_parser("train", help="train a learned policy (H²INT) with rsl-rl PPO")
+    p.add_argument("algo", metavar="METHOD", help="registered PPO method: h2int")
+    p.add_argument("--variant", default=None, help="h2int architecture: h2int (default), flat, meanpool or standard")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
     p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")
@@ -231,7 +243,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="no curriculum: train at the final ρ (rho_min = 0) from the start")
     p.set_defaults(func=train_cmd)
     p = sub.add_parser("export", help="export a checkpoint to TorchScript and ONNX")
-    p.add_argument("--checkpoint", required=True)
+    p.add_argument("--checkpoint", default=None, help="H²INT checkpoint (path or shipped name; default: h2int)")
     p.add_argument("--out", default="export")
     p.set_defaults(func=export_cmd)
     p = sub.add_parser("tables", help="the paper's Table I/II/III cells for one policy")

@@ -133,19 +133,13 @@ class Entry:
         return dict(self.kwargs)
 
 
-def _checkpoint(name: str) -> str:
-    import os
-
-    return os.path.normpath(os.path.join(os.path.dirname(__file__), "..", "leaderboards", "checkpoints", name))
-
-
 ENTRIES: dict[str, Entry] = {e.slug: e for e in (
     Entry("orca", "orca"),
     Entry("social_force", "social_force"),
-    Entry("h2int", "h2int", (("checkpoint", _checkpoint("h2int.pt")),)),
-    Entry("h2int-flat", "h2int", (("checkpoint", _checkpoint("flat.pt")),), "ablation"),
-    Entry("h2int-meanpool", "h2int", (("checkpoint", _checkpoint("meanpool.pt")),), "ablation"),
-    Entry("h2int-standard", "h2int", (("checkpoint", _checkpoint("standard.pt")),), "ablation"),
+    Entry("h2int", "h2int", (("checkpoint", "h2int"),)),
+    Entry("h2int-flat", "h2int", (("checkpoint", "flat"),), "ablation"),
+    Entry("h2int-meanpool", "h2int", (("checkpoint", "meanpool"),), "ablation"),
+    Entry("h2int-standard", "h2int", (("checkpoint", "standard"),), "ablation"),
 )}
 """The shipped leaderboard's rows (the learned baselines CADRL, SARL, DS-RNN and AIG-GST join as they land)."""
 
@@ -169,13 +163,17 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
     import hashlib
     import os
 
+    from crowdbench import checkpoints
+
     kwargs = entry.policy_kwargs()
     digest = None
     ckpt = kwargs.get("checkpoint")
+    if ckpt:
+        ckpt = checkpoints.resolve(entry.policy, ckpt)  # a path, or the name of a shipped checkpoint
     if ckpt and os.path.exists(ckpt):
         with open(ckpt, "rb") as f:
             digest = hashlib.sha256(f.read()).hexdigest()
-    shown = {k: (os.path.relpath(v) if k == "checkpoint" else v) for k, v in kwargs.items()}
+    shown = {k: (v if k != "checkpoint" or not os.path.exists(v) else os.path.relpath(v)) for k, v in kwargs.items()}
     return {"policy": entry.policy, "kwargs": shown, "checkpoint_sha256": digest, "episodes": episodes, "seed": seed}
 
 

@@ -10,6 +10,7 @@ after which ``crowdbench.humans.make("theirs")`` (and ``parallel_env(human_model
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Callable
 from importlib.metadata import entry_points
 from typing import Generic, TypeVar
@@ -29,13 +30,20 @@ class Registry(Generic[T]):
     def __init__(self, kind: str, group: str) -> None:
         self.kind = kind
         self.group = group
-        self._factories: dict[str, Callable[..., T]] = {}
+        self._factories: dict[str, Callable[..., T] | str] = {}
 
-    def register(self, name: str, factory: Callable[..., T] | None = None, *, overwrite: bool = False):
-        """Register ``factory`` under ``name``; usable as ``register("x", F)`` or as a decorator ``@register("x")``."""
+    def register(self, name: str, factory: Callable[..., T] | str | None = None, *, overwrite: bool = False):
+        """Register ``factory`` under ``name``; usable as ``register("x", F)`` or as a decorator ``@register("x")``.
 
-        def _add(f: Callable[..., T]) -> Callable[..., T]:
-            if not overwrite and name in self._factories and self._factories[name] is not f:
+        ``factory`` may also be a ``"package.module:attribute"`` string, imported on first use: a plug-in whose
+        module pulls in heavy libraries (torch) costs nothing until it is asked for by name.
+        """
+
+        def _add(f: Callable[..., T] | str) -> Callable[..., T] | str:
+            old = self._factories.get(name)
+            same = old is f or (isinstance(old, str) and not isinstance(f, str)
+                                and old == f"{f.__module__}:{f.__qualname__}")  # the lazy entry, now imported
+            if not overwrite and old is not None and not same:
                 raise ValueError(f"{self.kind} {name!r} is already registered; pass overwrite=True to replace it")
             self._factories[name] = f
             return f
@@ -57,7 +65,12 @@ class Registry(Generic[T]):
         """Return the factory for ``name``; raise ``ValueError`` naming the valid choices if unknown."""
         if name not in self._factories and not self._load_entry_point(name):
             raise ValueError(f"unknown {self.kind} {name!r}; valid choices: {', '.join(self.names())}")
-        return self._factories[name]
+        factory = self._factories[name]
+        if isinstance(factory, str):  # lazy "module:attribute"; importing it may register the object itself
+            module, _, attr = factory.partition(":")
+            obj = getattr(importlib.import_module(module), attr)
+            self._factories[name] = factory = obj
+        return factory
 
     def make(self, name: str, **kwargs) -> T:
         """Instantiate ``name`` with ``kwargs``."""

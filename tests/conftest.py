@@ -5,13 +5,10 @@ from pathlib import Path
 
 import pytest
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared"
+DATA = Path(__file__).resolve().parent / "data"
 
 
 @pytest.fixture(scope="session")
 def orca_reference():
-    """Reference RVO2 runs shipped in ../shared/reference/orca (skips if the shared folder is absent)."""
-    root = SHARED / "reference" / "orca"
-    if not root.exists():
-        pytest.skip(f"reference data not found at {root}")
-    return {name: json.loads((root / f"orca_{name}.json").read_text()) for name in ("headon2", "circle8")}
+    """Reference RVO2 runs (copied from ../shared/reference/orca into tests/data, with its README)."""
+    return {name: json.loads((DATA / f"orca_{name}.json").read_text()) for name in ("headon2", "circle8")}

@@ -1,12 +1,16 @@
-"""Robot policies: the contract, the registry and the classic baselines."""
+"""Robot policies: the plug-in contract, the registry, the classic baselines and the learned methods.
+
+Layout: :mod:`~crowdbench.policies.base` (contract + registry) and :mod:`~crowdbench.policies.classic` (``linear``,
+``orca``, ``social_force``: numpy only) here; each learned method is a sub-package (``h2int/``: model, policy wrapper,
+export, private ``_kernels/``). Learned methods are registered by ``"module:Class"`` string and imported on first
+use, so ``import crowdbench.policies`` and the classic baselines never import torch.
+"""
 
 from __future__ import annotations
 
 from crowdbench.policies.base import POLICIES, RobotPolicy, make_policy, register
 from crowdbench.policies.classic import LinearPolicy, ORCAPolicy, SocialForcePolicy
 
+register("h2int", "crowdbench.policies.h2int.policy:H2INTPolicy")
+
 __all__ = ["POLICIES", "LinearPolicy", "ORCAPolicy", "RobotPolicy", "SocialForcePolicy", "make_policy", "register"]
-
-from crowdbench.policies.h2int import H2INTPolicy  # noqa: E402  (registers "h2int")
-
-__all__ += ["H2INTPolicy"]

@@ -1,50 +1,107 @@
-"""Rollout collection for rsl-rl PPO, pipelined across world groups.
+"""Rollouts in which the world processes compute the robot's actions themselves — the one rollout path.
 
-With the worlds in ``K ≥ 2`` worker processes (:class:`~crowdbench.training.vecenv.CrowdVecEnv` ``processes=K``),
-the policy acts on one group while the other groups step: group k's step t runs while this process computes the
-actions of group k + 1 — on 2 cores the environment and the network overlap instead of taking turns. The transitions
-written to rsl-rl's storage are exactly those of ``alg.act`` / ``env.step`` / ``alg.process_env_step`` on the whole
-batch (observations, actions, values, log-probabilities, distribution parameters, recurrent states before acting,
-rewards with time-out bootstrapping, dones); only the order in which groups are computed differs, so the network sees
-smaller batches (float rounding) and a curriculum change takes effect one group later.
+Every world process (:class:`~crowdbench.training.shards.Shard`) holds a :class:`RolloutPolicy` — a copy of the
+actor and the critic's value head, refreshed from a :class:`PolicySnapshot` (their state dicts) before every
+rollout — and the recurrent state of its own worlds; each step it *acts and then steps* its worlds without waiting
+for anyone, so on two cores the network and the physics overlap instead of taking turns. The training process only
+hands out, per step and group, the Gaussian noise and the curriculum's current ρ, and files the transitions into
+rsl-rl's storage (:func:`store_step`: what ``PPO.act`` + ``PPO.process_env_step`` would record).
 
-With one group it is the plain synchronous loop.
+The numbers do not depend on how the worlds are split: the noise of the whole rollout is drawn at its start from the
+training process's torch generator, ``randn(steps, num_envs, A)``, and action = mean + std · noise, so any number of
+world processes (``processes=1`` runs the same code in this process) gives the same transitions up to float
+rounding (tested).
 """
 
 from __future__ import annotations
 
+import pickle
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
+import numpy as np
 import torch
 from rsl_rl.storage import RolloutStorage
 from tensordict import TensorDict
+from torch.distributions import Normal
 
-from crowdbench.training.vecenv import CrowdVecEnv
+from crowdbench.training.models import RecurrentTrunkActor, SharedTrunkCritic
+from crowdbench.training.ppo import gaussian_std
 
 
-def collect(alg: Any, env: CrowdVecEnv, obs: TensorDict, steps: int, worker_acting: bool = False
-            ) -> tuple[TensorDict, dict, list[float]]:
-    """Fill ``alg.storage`` with ``steps`` transitions per world (inside ``torch.inference_mode``).
+def build_models(actor_class: type[RecurrentTrunkActor], actor_cfg: dict[str, Any], critic_cfg: dict[str, Any],
+                 shapes: dict[str, tuple[int, ...]], num_actions: int) -> tuple[RecurrentTrunkActor, SharedTrunkCritic]:
+    """A fresh actor and critic (observation groups of per-sample ``shapes``); picklable through ``partial``."""
+    obs = TensorDict({k: torch.zeros(1, *s) for k, s in shapes.items()}, batch_size=[1])
+    groups = {"actor": list(actor_class.obs_keys), "critic": list(actor_class.obs_keys)}
+    actor = actor_class(obs, groups, "actor", num_actions, **actor_cfg)
+    return actor, SharedTrunkCritic(obs, groups, "critic", 1, actor=actor, **critic_cfg)
 
-    ``worker_acting``: the world processes compute the actions (:mod:`crowdbench.training.acting`, where the actor
-    supports it). Returns the observations after the last step, the last step's ``extras`` and the mean reward of
-    every step.
-    """
-    if worker_acting:
-        from crowdbench.training import acting  # (acting builds on this module)
 
-        if acting.supported(alg.actor):
-            return acting.collect_worker_acting(alg, env, obs, steps)
-    if len(env.groups) == 1:
-        rewards: list[float] = []
-        extras: dict = {}
-        for _ in range(steps):
-            actions = alg.act(obs)
-            obs, rew, dones, extras = env.step(actions)
-            alg.process_env_step(obs, rew, dones, extras)
-            rewards.append(float(rew.mean()))
-        return obs, extras, rewards
-    return _Pipeline(alg, env).run(obs, steps)
+@dataclass
+class PolicySnapshot:
+    """The policy as it is now, for a world process: how to build the networks and their weights."""
+
+    build: Callable[[], tuple[RecurrentTrunkActor, SharedTrunkCritic]]
+    """Module-level function or ``functools.partial`` of one (pickled by reference, also under ``spawn``)."""
+    actor: dict[str, torch.Tensor]
+    critic: dict[str, torch.Tensor]
+
+    @classmethod
+    def of(cls, alg: Any, build: Callable[[], tuple[RecurrentTrunkActor, SharedTrunkCritic]]) -> PolicySnapshot:
+        return cls(build, alg.actor.state_dict(), alg.critic.state_dict())
+
+
+class RolloutPolicy:
+    """The stochastic policy and value function, for one batch of worlds (the recurrent state ``(1, n, H)`` is
+    kept by the caller)."""
+
+    def __init__(self, snapshot: PolicySnapshot) -> None:
+        # fork_rng: building initialises parameters, which must not draw from the trainer's stream (in-process shard)
+        with torch.random.fork_rng(), torch.inference_mode(False), torch.no_grad():
+            self.actor, self.critic = snapshot.build()
+        self.actor.eval()
+        self.load(snapshot)
+
+    def load(self, snapshot: PolicySnapshot) -> None:
+        """Take the snapshot's weights."""
+        with torch.inference_mode(False), torch.no_grad():
+            self.actor.load_state_dict(snapshot.actor)
+            self.critic.load_state_dict(snapshot.critic)
+            self.std = gaussian_std(self.actor.distribution).detach().clone()
+
+    def initial_state(self, n: int) -> np.ndarray:
+        return np.zeros((1, n, self.actor.rnn.rnn.hidden_size), np.float32)
+
+    def act(self, obs: dict[str, np.ndarray], state: np.ndarray, noise: np.ndarray
+            ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
+        """Actions ``(n, A)`` (float64, for the worlds) for observations ``obs`` (arrays ``(n, ...)``), recurrent
+        ``state`` ``(1, n, H)`` and standard-normal ``noise`` ``(n, A)``; the transition record (state before
+        acting, actions, values, log-probabilities, mean, std) and the next state. Arrays, not tensors: they cross
+        process boundaries as plain bytes."""
+        actor = self.actor
+        with torch.inference_mode():
+            z = actor.encode({k: torch.from_numpy(obs[k]) for k in actor.obs_keys})
+            out, nxt = actor.rnn.rnn(z.unsqueeze(0), torch.from_numpy(state))
+            latent = out.squeeze(0)
+            mean = actor.mlp(latent)
+            std = self.std.expand_as(mean)
+            actions = mean + std * torch.from_numpy(noise)
+            record = {"hidden": state, "actions": actions.numpy(), "values": actor.value_head()(latent).numpy(),
+                      "logp": Normal(mean, std).log_prob(actions).sum(-1).numpy(), "mean": mean.numpy(),
+                      "std": std.numpy()}
+        return actions.numpy().astype(np.float64), record, nxt.numpy()
+
+
+def snapshot_builder(alg: Any, cfg: dict[str, Any], obs: TensorDict, num_actions: int
+                     ) -> Callable[[], tuple[RecurrentTrunkActor, SharedTrunkCritic]]:
+    """The picklable network builder of a trainer's rsl-rl config (``cfg["actor"]``, ``cfg["critic"]``)."""
+    actor_cfg = {k: v for k, v in cfg["actor"].items() if k != "class_name"}
+    critic_cfg = {k: v for k, v in cfg["critic"].items() if k != "class_name"}
+    shapes = {k: tuple(obs[k].shape[1:]) for k in type(alg.actor).obs_keys}
+    return partial(build_models, type(alg.actor), actor_cfg, critic_cfg, shapes, num_actions)
 
 
 def store_step(alg: Any, parts: list[dict[str, Any]]) -> float:
@@ -69,61 +126,31 @@ def store_step(alg: Any, parts: list[dict[str, Any]]) -> float:
     return float(rewards.mean())
 
 
-class _Pipeline:
-    def __init__(self, alg: Any, env: CrowdVecEnv) -> None:
-        self.alg, self.env = alg, env
-        self.actor, self.critic, self.rnn = alg.actor, alg.critic, alg.actor.rnn
-        self.groups = env.groups
-
-    def _act(self, k: int, obs: TensorDict) -> dict[str, Any]:
-        """``alg.act`` on group ``k``: the full recurrent state is sliced in and written back."""
-        full = self.rnn.hidden_state
-        sl = self.groups[k]
-        h = full[:, sl].clone()
-        self.rnn.hidden_state = h
-        actions = self.actor(obs, stochastic_output=True).detach()
-        values = self.critic(obs).detach()  # reuses the actor's latent for this observation object
-        part = {"obs": obs, "hidden": h, "actions": actions, "values": values,
-                "logp": self.actor.get_output_log_prob(actions).detach(),
-                "dist": tuple(p.detach() for p in self.actor.output_distribution_params)}
-        full[:, sl] = self.rnn.hidden_state
-        self.rnn.hidden_state = full
-        return part
-
-    def _add(self, parts: list[dict[str, Any]], results: list[tuple]) -> float:
-        """``alg.process_env_step`` for one full step assembled from the groups; returns its mean reward."""
-        return store_step(self.alg, [{**p, "rewards": r[0], "dones": r[1], "time_outs": r[2]}
-                                     for p, r in zip(parts, results, strict=True)])
-
-    def _finish(self, k: int, obs: list[TensorDict], results: list) -> dict:
-        o, rew, dones, extras = self.env.step_wait(k)
-        obs[k] = o
-        results[k] = (rew, dones, extras["time_outs"])
-        if dones.any():  # zero the recurrent state of finished episodes before the group acts again
-            view = self.rnn.hidden_state[:, self.groups[k]]
-            view[:, dones] = 0.0
-        return extras
-
-    def run(self, obs_full: TensorDict, steps: int) -> tuple[TensorDict, dict, list[float]]:
-        K = len(self.groups)
-        if self.rnn.hidden_state is None:
-            self.rnn.hidden_state = torch.zeros(1, self.env.num_envs, self.rnn.rnn.hidden_size)
-        obs = [obs_full[sl] for sl in self.groups]
-        prev: list[dict[str, Any]] = []
-        results: list = [None] * K
-        rewards: list[float] = []
-        extras: dict = {}
-        for t in range(steps):
-            cur: list[dict[str, Any]] = []
-            for k in range(K):
-                if t:
-                    extras = self._finish(k, obs, results)
-                cur.append(self._act(k, obs[k]))
-                self.env.step_async(k, cur[k]["actions"])
-            if t:
-                rewards.append(self._add(prev, results))
-            prev = cur
-        for k in range(K):
-            extras = self._finish(k, obs, results)
-        rewards.append(self._add(prev, results))
-        return torch.cat(obs, 0), extras, rewards
+def collect(alg: Any, env: Any, obs: TensorDict, steps: int, snapshot: PolicySnapshot
+            ) -> tuple[TensorDict, dict, list[float]]:
+    """Fill ``alg.storage`` with ``steps`` transitions per world, the worlds' processes acting with ``snapshot``
+    (module docstring). Returns the observations after the last step, the last step's ``extras`` and every step's
+    mean reward; leaves the actor's recurrent state at the worlds' (for ``compute_returns``)."""
+    groups = env.groups
+    blob = pickle.dumps(snapshot)  # plain bytes: torch's multiprocessing reducers would move tensors to shared memory
+    env.worlds.call("set_policy", [(snapshot if env.worlds.conns[k] is None else blob,) for k in range(len(groups))])
+    noise = torch.randn(steps, env.num_envs, env.num_actions).numpy()
+    current = [obs[sl] for sl in groups]
+    for k, sl in enumerate(groups):
+        env.act_async(k, noise[0, sl])
+    rewards: list[float] = []
+    extras: dict = {}
+    state: list[np.ndarray] = [np.empty(0)] * len(groups)
+    for t in range(steps):
+        parts = []
+        for k, sl in enumerate(groups):
+            o, rew, dones, extras, record, state[k] = env.act_wait(k)
+            if t + 1 < steps:
+                env.act_async(k, noise[t + 1, sl])
+            part = {key: torch.from_numpy(v) for key, v in record.items()}
+            part["dist"] = (part.pop("mean"), part.pop("std"))
+            parts.append({**part, "obs": current[k], "rewards": rew, "dones": dones, "time_outs": extras["time_outs"]})
+            current[k] = o
+        rewards.append(store_step(alg, parts))
+    alg.actor.rnn.hidden_state = torch.from_numpy(np.concatenate(state, 1))
+    return torch.cat(current, 0), extras, rewards

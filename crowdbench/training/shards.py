@@ -5,9 +5,9 @@ shard resets its finished worlds itself, right after the step that finished them
 trip per step, and the numbers do not depend on how the batch is split: any sharding gives exactly the same
 rollouts for the same actions (tested).
 
-Worker processes are started with ``fork`` where the platform has it, so pedestrian models registered at run time are
-visible to them; with ``spawn`` (platforms without fork) register models through the ``crowdbench.humans`` entry
-point instead.
+Worker processes are started with ``fork`` where the platform has it (Linux), so pedestrian models registered at run
+time are visible to them, and with ``spawn`` elsewhere (macOS, Windows) or when asked (``start_method="spawn"``,
+tested): then register your own models through the ``crowdbench.humans`` entry point, which a fresh interpreter sees.
 """
 
 from __future__ import annotations
@@ -62,7 +62,7 @@ class Shard:
         self.streams = [np.random.default_rng(s) for s in streams]
         self.last_obs: dict[str, np.ndarray] = {}
         self.policy: Any = None
-        """What :meth:`act_step` acts with (:class:`crowdbench.training.acting.RolloutPolicy`)."""
+        """What :meth:`act_step` acts with (:class:`crowdbench.training.rollout.RolloutPolicy`)."""
         self.policy_state: Any = None
         """The policy's recurrent state for these worlds (kept across :meth:`set_policy`; zeroed by resets)."""
 
@@ -103,16 +103,22 @@ class Shard:
         self.last_obs = self.obs_builder.build(self.world)
         return self.last_obs, self.world.steps.copy()
 
-    def set_policy(self, policy: Any) -> None:
-        """Install the policy :meth:`act_step` acts with (a fresh copy before every rollout, pickled for a worker
-        process; the recurrent state stays). Worker processes use one intra-op torch thread, as training does."""
-        if isinstance(policy, bytes):  # pickled by the training process
+    def set_policy(self, snapshot: Any) -> None:
+        """Take the weights :meth:`act_step` acts with (a :class:`~crowdbench.training.rollout.PolicySnapshot`
+        before every rollout, pickled for a worker process; the recurrent state stays). Worker processes use one
+        intra-op torch thread, as training does."""
+        from crowdbench.training.rollout import RolloutPolicy
+
+        if isinstance(snapshot, bytes):  # pickled by the training process
             if self.policy is None:
                 import torch
 
                 torch.set_num_threads(1)
-            policy = pickle.loads(policy)  # noqa: S301 - from our own parent process
-        self.policy = policy
+            snapshot = pickle.loads(snapshot)  # noqa: S301 - from our own parent process
+        if self.policy is None:
+            self.policy = RolloutPolicy(snapshot)
+        else:
+            self.policy.load(snapshot)
 
     def act_step(self, noise: np.ndarray, steps: np.ndarray, rho: float | None
                  ) -> tuple[StepOut, dict[str, np.ndarray], np.ndarray]:
@@ -123,7 +129,8 @@ class Shard:
             self.policy_state = self.policy.initial_state(self.world.num_worlds)
         actions, record, state = self.policy.act(self.last_obs, self.policy_state, noise)
         out = self.step(actions, steps, rho)
-        self.policy_state = self.policy.reset_state(state, out.terminated | out.truncated)
+        state[:, out.terminated | out.truncated] = 0.0  # finished episodes start from a zero state
+        self.policy_state = state
         return out, record, self.policy_state
 
     def get_streams(self) -> list[dict]:
@@ -162,12 +169,17 @@ class ShardedWorlds:
         seed: Master seed of the per-world episode-seed streams.
         shards: Number of slices.
         local: Step the first slice in this process (the others in worker processes); ``False`` puts every slice in
-            a worker, so that this process is free while they step (see :meth:`send_step`).
+            a worker, so that this process is free while they step.
+        start_method: ``"fork"``, ``"spawn"`` or ``"forkserver"``; default: ``fork`` where available, else ``spawn``.
     """
 
-    def __init__(self, spec: ShardSpec, seed: int = 0, shards: int = 1, local: bool = True) -> None:
+    def __init__(self, spec: ShardSpec, seed: int = 0, shards: int = 1, local: bool = True,
+                 start_method: str | None = None) -> None:
         if not 1 <= shards <= spec.num_worlds:
             raise ValueError(f"shards={shards}; valid choices: 1 … num_worlds ({spec.num_worlds})")
+        methods = mp.get_all_start_methods()
+        if start_method is not None and start_method not in methods:
+            raise ValueError(f"start_method={start_method!r}; valid choices: {', '.join(methods)}")
         self.num_worlds = spec.num_worlds
         sizes = [len(a) for a in np.array_split(np.arange(spec.num_worlds), shards)]
         self.bounds = np.cumsum([0, *sizes])
@@ -175,7 +187,7 @@ class ShardedWorlds:
         streams = np.random.SeedSequence(seed).spawn(spec.num_worlds)
         self.local = Shard(replace(spec, num_worlds=sizes[0]), streams[self.slices[0]]) if local else None
         self._local_result: Any = None  # the local shard's result between send() and wait()
-        ctx = mp.get_context("fork" if "fork" in mp.get_all_start_methods() else "spawn")
+        ctx = mp.get_context(start_method or ("fork" if "fork" in methods else "spawn"))
         self.conns: list[Connection | None] = [None] if local else []
         self.procs: list[Any] = []
         for k in range(1 if local else 0, shards):
@@ -226,10 +238,6 @@ class ShardedWorlds:
             out, self._local_result = self._local_result, None
             return out
         return self._recv(conn)
-
-    def send_step(self, k: int, actions: np.ndarray, steps: np.ndarray, rho: float | None) -> None:
-        """Start stepping shard ``k`` (its slice of ``actions`` ``(n_k, 2)`` and ``steps`` ``(n_k,)``)."""
-        self.send(k, "step", actions, steps, rho)
 
     def send_act_step(self, k: int, noise: np.ndarray, steps: np.ndarray, rho: float | None) -> None:
         """Start :meth:`Shard.act_step` on shard ``k`` (its slice of the ``noise`` and of ``steps``)."""

@@ -1,4 +1,5 @@
-"""rsl-rl ``VecEnv`` over a batch of crowd worlds, with the paper's responsiveness-annealing curriculum.
+"""rsl-rl ``VecEnv`` over a batch of crowd worlds, with the paper's responsiveness-annealing curriculum
+(:mod:`crowdbench.training.curriculum`).
 
 Robot only; pedestrians are driven by the world's pedestrian model (latent-responsive ORCA for H²INT).
 Same-step auto-reset; ``extras["time_outs"]`` marks truncations; observations are a TensorDict of the groups
@@ -8,7 +9,6 @@ Same-step auto-reset; ``extras["time_outs"]`` marks truncations; observations ar
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
@@ -17,57 +17,9 @@ from rsl_rl.env import VecEnv
 from tensordict import TensorDict
 
 from crowdbench.config import make_config
+from crowdbench.training.curriculum import Curriculum
 from crowdbench.training.shards import ShardedWorlds, ShardSpec, StepOut
 from crowdbench.worlds.world import COLLISION, SUCCESS, TIMEOUT
-
-
-@dataclass
-class Curriculum:
-    """Responsiveness annealing (§Training Strategy): start at ``rho_init``; whenever the success rate over the last
-    ``window`` episodes — all finished at the current ρ — is ≥ ``eta`` and ``cooldown`` episodes have finished since
-    the last change, ρ ← max(ρ − ``delta``, ``rho_min``). ``enabled=False`` keeps ρ fixed (``--no-anneal``)."""
-
-    rho_init: float = 0.8
-    rho_min: float = 0.0
-    delta: float = 0.1
-    eta: float = 0.9
-    window: int = 200
-    cooldown: int = 200
-    enabled: bool = True
-
-    def __post_init__(self) -> None:
-        self.rho = self.rho_init
-        self.recent: deque[bool] = deque(maxlen=self.window)
-        self.since_change = 0
-        self.changes: list[tuple[int, float]] = []
-
-    def record(self, successes: np.ndarray, episodes_total: int) -> bool:
-        """Add finished episodes' outcomes (``episodes_total`` counts them too); returns True when ρ was lowered.
-        Outcomes are taken one at a time, in order, so the schedule does not depend on how they are batched."""
-        first = episodes_total - len(successes)
-        lowered = False
-        for i, s in enumerate(successes):
-            self.recent.append(bool(s))
-            self.since_change += 1
-            if (self.enabled and self.rho > self.rho_min + 1e-9 and len(self.recent) == self.window
-                    and self.since_change >= self.cooldown and sum(self.recent) >= self.eta * self.window):
-                self.rho = round(max(self.rho - self.delta, self.rho_min), 10)
-                self.recent.clear()
-                self.since_change = 0
-                self.changes.append((first + i + 1, self.rho))
-                lowered = True
-        return lowered
-
-    def state_dict(self) -> dict[str, Any]:
-        d = asdict(self)
-        d.update(rho=self.rho, recent=list(self.recent), since_change=self.since_change,
-                 changes=[list(c) for c in self.changes])
-        return d
-
-    def load_state_dict(self, d: dict[str, Any]) -> None:
-        self.rho, self.since_change = float(d["rho"]), int(d["since_change"])
-        self.recent = deque((bool(x) for x in d["recent"]), maxlen=self.window)
-        self.changes = [(int(a), float(b)) for a, b in d["changes"]]
 
 
 class CrowdVecEnv(VecEnv):
@@ -81,8 +33,9 @@ class CrowdVecEnv(VecEnv):
         reward_scale: Multiplies the rewards handed to PPO (outcomes and metrics are unaffected).
         processes: 1 steps every world in this process; ``k ≥ 2`` splits them into ``k`` groups, each stepped by a
             worker process (:class:`~crowdbench.training.shards.ShardedWorlds`), in parallel by :meth:`step`, or
-            group by group with :meth:`step_async` / :meth:`step_wait` so that the caller can compute one group's
-            actions while others step. The same numbers for any value. Call :meth:`close` when done.
+            group by group, each group's process acting too, with :meth:`act_async` / :meth:`act_wait`
+            (:mod:`crowdbench.training.rollout`). The same numbers for any value. Call :meth:`close` when done.
+        start_method: Worker-process start method (default: ``fork`` where available, else ``spawn``).
         layout, human_model, human_model_kwargs: As for :class:`~crowdbench.worlds.CrowdWorld`.
         **world_options: :class:`~crowdbench.config.WorldConfig` fields (e.g. ``humans_range=(10, 30)``).
     """
@@ -90,7 +43,7 @@ class CrowdVecEnv(VecEnv):
     def __init__(self, num_envs: int = 128, seed: int = 0, curriculum: Curriculum | None = None,
                  layout: str = "circle_crossing", human_model: str = "responsive_orca",
                  human_model_kwargs: dict | None = None, reward_scale: float = 1.0, processes: int = 1,
-                 **world_options: Any) -> None:
+                 start_method: str | None = None, **world_options: Any) -> None:
         if processes < 1:
             raise ValueError(f"processes={processes}; valid choices: 1 (this process) or ≥ 2 (worker processes)")
         self.reward_scale = reward_scale
@@ -98,7 +51,7 @@ class CrowdVecEnv(VecEnv):
         kwargs = {"responsiveness": self.curriculum.rho, **(human_model_kwargs or {})}
         self.config = make_config(**world_options)
         self.worlds = ShardedWorlds(ShardSpec(self.config, num_envs, layout, human_model, kwargs), seed, processes,
-                                    local=processes == 1)
+                                    local=processes == 1, start_method=start_method)
         self.groups = self.worlds.slices
         """The world slices stepped by each process (one slice when ``processes == 1``)."""
         self.num_envs = num_envs
@@ -161,15 +114,6 @@ class CrowdVecEnv(VecEnv):
         out = self.worlds.step(actions.detach().cpu().numpy().astype(np.float64), self.episode_length_buf.numpy(),
                                self.curriculum.rho)
         return self._finish(None, out)
-
-    def step_async(self, k: int, actions: torch.Tensor) -> None:
-        """Start stepping group ``k`` with its actions ``(n_k, 2)``."""
-        self.worlds.send_step(k, actions.detach().cpu().numpy().astype(np.float64),
-                              self.episode_length_buf[self.groups[k]].numpy(), self.curriculum.rho)
-
-    def step_wait(self, k: int):
-        """Finish group ``k``'s step: ``(obs, rewards, dones, extras)`` of its worlds."""
-        return self._finish(k, self.worlds.wait(k))
 
     def act_async(self, k: int, noise: np.ndarray) -> None:
         """Start group ``k``'s act-and-step with the policy installed in its process

@@ -3,20 +3,38 @@ static segments/polygons, synchronised with the numpy state in one C call per wo
 
 The fast path drives the same C iterators that :mod:`pymunk.batch` uses (``pmSpaceBody{Set,Get}IteratorFuncBatched``)
 with float arrays that point straight into numpy memory, so a world step costs one velocity write, one
-``cpSpaceStep`` and one position read — no per-body Python. :meth:`PymunkWorlds.verify` cross-checks it against the
-public ``pymunk.batch`` API at construction. Requires pymunk 7.x (pinned in ``pyproject.toml``).
+``cpSpaceStep`` and one position read — no per-body Python. It reaches them through pymunk's private
+``pymunk._chipmunk`` module (verified on pymunk 7.3.1; pinned ``>=7.3,<8``). The public fallback does the same
+through :func:`pymunk.batch.set_space_bodies` / :func:`~pymunk.batch.get_space_bodies` and ``Space.step`` (a few µs
+more per world-step); it is used when the private module is missing, when :func:`use_fast_sync` turns the fast path
+off, or with ``CROWDBENCH_PURE_PYMUNK=1``. Both give identical positions (tested).
 """
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 
 import numpy as np
 import pymunk
 import pymunk.batch as pmb
-from pymunk._chipmunk import ffi, lib
 
 from crowdbench.geometry import Polygon
+
+try:  # private to pymunk: the fast path only (see the module docstring)
+    from pymunk._chipmunk import ffi, lib
+except ImportError:  # pragma: no cover - a pymunk without it takes the public path
+    ffi = lib = None
+
+_FAST = {"enabled": lib is not None and os.environ.get("CROWDBENCH_PURE_PYMUNK", "") not in ("1", "true", "yes")}
+
+
+def use_fast_sync(enabled: bool) -> bool:
+    """Allow (``True``) or forbid the private fast synchronisation for worlds built from now on; returns the
+    previous setting (always ``False`` without ``pymunk._chipmunk``)."""
+    before = _FAST["enabled"]
+    _FAST["enabled"] = bool(enabled) and lib is not None
+    return before
 
 AGENT_GROUP = 1
 """Agent shapes share this :class:`pymunk.ShapeFilter` group: pymunk never builds agent–agent contacts (collisions
@@ -40,6 +58,10 @@ class PymunkWorlds:
         slack = 8  # rows of headroom so the C array never reallocates away from numpy memory
         self._vel = np.zeros((B, A + slack, 2))
         self._pos = np.zeros((B, A + slack, 2))
+        self.fast = bool(_FAST["enabled"])
+        """Whether this batch synchronises through the private fast path."""
+        if not self.fast:
+            return
         self._keep: list = []
         self._set_vel = [self._data(self._vel[b], pmb.BodyFields.VELOCITY) for b in range(B)]
         self._set_pos = [self._data(self._pos[b], pmb.BodyFields.POSITION) for b in range(B)]
@@ -87,6 +109,9 @@ class PymunkWorlds:
         for b, p in zip(worlds, positions, strict=True):
             self._pos[b, :A] = p
             self._pos[b, A:] = 0.0  # the static body, if visited, stays at the origin
+            if not self.fast:
+                pmb.set_space_bodies(self.spaces[b], pmb.BodyFields.POSITION, self._buffer(self._pos[b]))
+                continue
             d = self._set_pos[b]
             d.floatArray.num = 0
             lib.cpSpaceEachBody(self.spaces[b]._space, self._set_fn, d)
@@ -97,6 +122,8 @@ class PymunkWorlds:
         """
         A = self.num_agents
         self._vel[:, :A] = velocities
+        if not self.fast:
+            return self._step_public(dt)
         set_fn, get_fn, step = self._set_fn, self._get_fn, lib.cpSpaceStep
         for b, space in enumerate(self.spaces):
             sp = space._space
@@ -107,6 +134,23 @@ class PymunkWorlds:
             g = self._get_pos[b]
             g.floatArray.num = 0
             lib.cpSpaceEachBody(sp, get_fn, g)
+        return self._pos[:, :A].copy()
+
+    @staticmethod
+    def _buffer(rows: np.ndarray) -> pmb.Buffer:
+        buf = pmb.Buffer()
+        buf.set_float_buf(rows.reshape(-1))
+        return buf
+
+    def _step_public(self, dt: float) -> np.ndarray:
+        """:meth:`step` through pymunk's public API only."""
+        A = self.num_agents
+        for b, space in enumerate(self.spaces):
+            pmb.set_space_bodies(space, pmb.BodyFields.VELOCITY, self._buffer(self._vel[b]))
+            space.step(dt)
+            out = pmb.Buffer()
+            pmb.get_space_bodies(space, pmb.BodyFields.POSITION, out)
+            self._pos[b, :A] = np.frombuffer(out.float_buf()).reshape(-1, 2)[:A]
         return self._pos[:, :A].copy()
 
     def verify(self, world: int = 0) -> None:

@@ -1,4 +1,5 @@
-"""Training smoke test: tiny train → checkpoint → exact resume → evaluate; exports match PyTorch; curriculum."""
+"""Training smoke test: tiny train → checkpoint → exact resume → evaluate; exports match PyTorch; curriculum;
+checkpoints are safe to load and old ones fail clearly."""
 
 from __future__ import annotations
 
@@ -6,16 +7,24 @@ import numpy as np
 import pytest
 import torch
 
+from crowdbench import checkpoints
 from crowdbench.cli import main
-from crowdbench.policies.deploy import export_module, export_onnx, export_torchscript, planar_to_unicycle
-from crowdbench.policies.h2int import H2INTPolicy, load_checkpoint
-from crowdbench.training.train import TrainConfig, train
-from crowdbench.training.vecenv import Curriculum
+from crowdbench.policies.h2int import H2INTPolicy
+from crowdbench.policies.h2int.export import export_module, export_onnx, export_torchscript
+from crowdbench.robots.deploy import planar_to_unicycle
+from crowdbench.training.config import TrainConfig
+from crowdbench.training.curriculum import Curriculum
+from crowdbench.training.trainer import train
+
+
+def load_checkpoint(path):
+    return checkpoints.load(path, "h2int")
 
 
 def tiny(**kw) -> TrainConfig:
-    base = dict(num_envs=8, steps_per_env=8, mini_batches=2, epochs=1, d_model=16, heads=2, ffn=16, gru_hidden=16,
-                head_dims=(16,), humans_range=(2, 5), checkpoint_every=2, eval_every=2, eval_episodes=4, window=8)
+    model = {"d_model": 16, "heads": 2, "ffn": 16, "gru_hidden": 16, "head_dims": (16,), **kw.pop("model", {})}
+    base = dict(num_envs=8, steps_per_env=8, mini_batches=2, epochs=1, model=model, humans_range=(2, 5),
+                checkpoint_every=2, eval_every=2, eval_episodes=4, window=8)
     base.update(kw)
     return TrainConfig(**base)
 
@@ -42,7 +51,8 @@ def test_resume_continues_exactly(runs):
 def test_checkpoint_loads_weights_only_and_has_artifacts(runs):
     root, _, _ = runs
     ckpt = load_checkpoint(root / "straight" / "last.pt")  # weights_only=True inside
-    assert ckpt["iteration"] == 4 and ckpt["variant"] == "h2int" and ckpt["seed"] == 0
+    assert ckpt["iteration"] == 4 and ckpt["model"]["variant"] == "h2int" and ckpt["seed"] == 0
+    assert ckpt["method"] == "h2int" and ckpt["format"] == checkpoints.FORMAT and ckpt["crowdbench_version"]
     assert (root / "straight" / "curve.png").stat().st_size > 1000
     assert (root / "straight" / "history.json").exists()
     assert any((root / "straight" / "tb").iterdir())
@@ -112,7 +122,7 @@ def test_no_anneal_trains_at_final_difficulty(tmp_path):
 
 
 def test_until_success_stops_at_the_first_evaluation_that_reaches_it(tmp_path, monkeypatch):
-    from crowdbench.training.train import Trainer
+    from crowdbench.training.trainer import Trainer
 
     rates = iter([0.5, 0.97, 1.0])
     monkeypatch.setattr(Trainer, "evaluate", lambda self, episodes: {"success_rate": next(rates),
@@ -128,7 +138,7 @@ def test_until_success_stops_at_the_first_evaluation_that_reaches_it(tmp_path, m
 
 
 def test_runs_table_reports_when_the_bar_was_first_reached(runs):
-    from crowdbench.training.train import runs_table
+    from crowdbench.training.plots import runs_table
 
     root, _, _ = runs
     histories = [str(root / "straight" / "history.json"), str(root / "split" / "history.json")]
@@ -148,3 +158,67 @@ def test_curves_command_plots_and_tabulates_runs(runs, tmp_path, capsys):
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     printed = capsys.readouterr().out
     assert printed.count("| h2int 1×2 seed 0 | iteration 2 |") == 4  # two runs, printed once per figure
+
+
+def test_legacy_checkpoints_evaluate_but_do_not_resume(tmp_path, capsys):
+    """The shipped ablations are `crowdbench.h2int/1` files of the previous training path: their weights load and
+    act; resuming them is one clear error."""
+    legacy = checkpoints.shipped("h2int", "meanpool")
+    assert torch.load(legacy, weights_only=True)["format"] == "crowdbench.h2int/1"
+    policy = H2INTPolicy(checkpoint="meanpool")
+    assert policy.meta["variant"] == "meanpool"
+    obs = {"robot": np.zeros((2, 9), np.float32), "humans": np.ones((2, 30, 2), np.float32),
+           "mask": np.ones((2, 30), np.float32)}
+    assert np.isfinite(policy.act(obs)).all()
+    code = main(["train", "h2int", "--resume", legacy, "--out", str(tmp_path / "r"), "--iterations", "1"])
+    assert code == 2 and "cannot be resumed" in capsys.readouterr().err
+
+
+def test_checkpoint_that_would_run_code_is_refused(tmp_path, capsys):
+    import os
+    import pickle
+
+    marker = tmp_path / "ran"
+
+    class Evil:
+        def __reduce__(self):
+            return (os.system, (f"touch {marker}",))
+
+    path = tmp_path / "evil.pt"
+    with open(path, "wb") as f:
+        pickle.dump({"format": checkpoints.FORMAT, "method": "h2int", "payload": Evil()}, f)
+    assert main(["evaluate", "h2int", "--checkpoint", str(path), "--episodes", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "refused" in err and "run code" in err and not marker.exists()
+
+
+def test_checkpoint_errors_name_the_problem(tmp_path):
+    with pytest.raises(ValueError, match="not found"):
+        checkpoints.load(tmp_path / "nope.pt")
+    torch.save({"format": "something/9"}, tmp_path / "other.pt")
+    with pytest.raises(ValueError, match="not a crowdbench checkpoint"):
+        checkpoints.load(tmp_path / "other.pt")
+    torch.save({"format": checkpoints.FORMAT, "method": "sarl"}, tmp_path / "sarl.pt")
+    with pytest.raises(ValueError, match="holds method 'sarl', not 'h2int'"):
+        checkpoints.load(tmp_path / "sarl.pt", "h2int")
+
+
+def test_train_config_is_frozen_strict_and_round_trips():
+    import dataclasses
+
+    cfg = tiny(model={"variant": "meanpool"})
+    assert TrainConfig.from_dict(cfg.to_dict()) == cfg
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.seed = 3
+    with pytest.raises(ValueError, match=r"unknown keys \['packed'\]"):
+        TrainConfig.from_dict({**cfg.to_dict(), "packed": True})
+    with pytest.raises(ValueError, match="variant='nope'; valid choices: h2int, flat, meanpool, standard"):
+        tiny(model={"variant": "nope"})
+    with pytest.raises(ValueError, match="unknown PPO method 'nope'; valid choices: h2int"):
+        TrainConfig(method="nope")
+    import inspect
+
+    lines = inspect.getsource(TrainConfig).splitlines()
+    for f in dataclasses.fields(TrainConfig):  # every field is followed by its docstring
+        i = next(k for k, line in enumerate(lines) if line.startswith(f"    {f.name}: "))
+        assert lines[i + 1].strip().startswith('"""'), f.name

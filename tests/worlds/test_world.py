@@ -107,6 +107,33 @@ def test_pymunk_is_in_sync():
     np.testing.assert_array_equal(w.physics_positions(), w.pos)
 
 
+def test_public_pymunk_fallback_gives_identical_worlds():
+    """The private fast synchronisation (pymunk._chipmunk) and the public pymunk.batch fallback: same trajectories,
+    walls and resets included."""
+    from crowdbench.worlds import physics
+
+    def run(fast: bool) -> list[np.ndarray]:
+        before = physics.use_fast_sync(fast)
+        try:
+            w = CrowdWorld(WorldConfig(num_humans=8, time_limit=10.0), 3, "intersection", "orca")
+            assert w.physics.fast == (fast and physics.lib is not None)
+            w.reset(seeds=[1, 2, 3])
+            rng = np.random.default_rng(0)
+            out = []
+            for _ in range(60):
+                r = w.step(rng.uniform(-1, 1, (3, 2)))
+                out.append(w.physics_positions().copy())
+                done = r.terminated | r.truncated
+                if done.any():
+                    w.reset(seeds=list(rng.integers(0, 1000, done.sum())), mask=done)
+            return out
+        finally:
+            physics.use_fast_sync(before)
+
+    for a, b in zip(run(True), run(False), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(layout=st.sampled_from(LAYOUTS.names()), n=st.integers(0, 30), seed=st.integers(0, 2**31 - 1),
        model=st.sampled_from(["linear", "social_force"]))

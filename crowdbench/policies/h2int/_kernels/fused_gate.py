@@ -1,13 +1,13 @@
-"""The GTrXL gate of ``h2int_net.GRUGate`` with its elementwise work fused, forward and backward.
+"""The GTrXL gate of ``model.GRUGate`` with its elementwise work fused, forward and backward.
 
     r = σ(W_r y + U_r x),  z = σ(W_z y + U_z x − b_g),  ĥ = tanh(W_g y + U_g (r ⊙ x)),  g(x, y) = (1 − z) ⊙ x + z ⊙ ĥ
 
 In PyTorch this is four matrix products and about a dozen elementwise kernels forward (twenty backward), each
 streaming a ``(T, d)`` array through memory. Here the four products stay PyTorch matrix products and everything
 between them is one numba loop per phase (the products through
-:mod:`crowdbench.policies.fast_linear`) (two forward, two backward). σ and tanh use rational approximations
+:mod:`.fast_linear`) (two forward, two backward). σ and tanh use rational approximations
 (Eigen's ``generic_fast_tanh_float``, absolute error ≤ 4e-7, tested), which vectorise. Used by
-:mod:`crowdbench.policies.packed` on token arrays ``(T, d)``.
+:mod:`.packed` on token arrays ``(T, d)``.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 import torch
 import torch.nn as nn
 
-from crowdbench.policies.fast_linear import linear
+from crowdbench.policies.h2int._kernels.fast_linear import linear
 
 _FM = {"reassoc", "contract", "nsz"}
 _F = np.float32
@@ -145,7 +145,7 @@ class FusedGate(torch.autograd.Function):
 
 
 def fused_gate(gate: nn.Module, x: torch.Tensor, y: torch.Tensor, proj: nn.Linear | None = None) -> torch.Tensor:
-    """``gate(x, y)`` for a ``h2int_net.GRUGate`` on ``(T, d)`` tokens, or ``gate(x, proj(y))`` with ``proj`` folded
+    """``gate(x, y)`` for a ``model.GRUGate`` on ``(T, d)`` tokens, or ``gate(x, proj(y))`` with ``proj`` folded
     into the gate's ``W`` (``W (P y + p) = (W P) y + W p``: one ``(T, d) × (d, d)`` product fewer, forward and
     backward); differentiable."""
     w, wb = gate.w.weight, None

@@ -7,11 +7,16 @@ instruction set and runs the same products at ≈ 190 GFLOP/s, with bit-identica
 computes the forward product and the input gradient ``dy W`` here; the weight gradient ``dyᵀ x`` (a long reduction)
 was not faster through it and stays with ``torch.mm``.
 
-The operator is private to PyTorch, so :data:`AVAILABLE` probes it once (present, and equal to ``F.linear`` on a
-test product); without it :func:`linear` is ``F.linear``.
+The operator is private to PyTorch: it is quarantined here, behind :func:`linear`, and used only where a probe found
+it present and equal to ``F.linear`` on a test product (verified on torch 2.13.0 CPU). Everywhere else — and when
+:func:`use_onednn` turns it off (tests do, to exercise the fallback) or the environment sets
+``CROWDBENCH_PURE_TORCH=1`` — :func:`linear` is ``F.linear``. Products under :data:`ROWS_QUANTUM` rows always take
+``F.linear``: there oneDNN gains nothing and the padding would cost (one robot's decision: 0.89 → 0.37 ms).
 """
 
 from __future__ import annotations
+
+import os
 
 import torch
 import torch.nn.functional as F  # noqa: N812 - the PyTorch convention
@@ -42,8 +47,31 @@ def _probe() -> bool:
         return False
 
 
-AVAILABLE = torch.backends.mkldnn.is_available() and _probe()
-"""Whether :func:`linear` uses oneDNN (else it is ``F.linear``)."""
+_state = {"enabled": os.environ.get("CROWDBENCH_PURE_TORCH", "") not in ("1", "true", "yes"), "probed": None}
+
+
+def use_onednn(enabled: bool) -> bool:
+    """Allow (``True``) or forbid the oneDNN path; returns the previous setting."""
+    before = _state["enabled"]
+    _state["enabled"] = bool(enabled)
+    return bool(before)
+
+
+def onednn_active() -> bool:
+    """Whether :func:`linear` currently uses oneDNN for large products (allowed, present and probed equal)."""
+    if not _state["enabled"]:
+        return False
+    if _state["probed"] is None:
+        _state["probed"] = bool(torch.backends.mkldnn.is_available()) and _probe()
+    return bool(_state["probed"])
+
+
+def padded_rows(n: int) -> int:
+    """Row count to allocate for ``n`` token rows: large arrays are rounded up to a multiple of
+    :data:`ROWS_QUANTUM` when oneDNN is in use (its kernels are compiled per row count), else ``n``."""
+    if n < ROWS_QUANTUM or not onednn_active():
+        return n
+    return -(-n // ROWS_QUANTUM) * ROWS_QUANTUM
 
 
 class _Linear(torch.autograd.Function):
@@ -67,7 +95,7 @@ class _Linear(torch.autograd.Function):
 def linear(x: torch.Tensor, w: torch.Tensor, b: torch.Tensor | None = None) -> torch.Tensor:
     """``F.linear(x, w, b)`` for float32 ``x`` ``(T, in)``, ``w`` ``(out, in)``, ``b`` ``(out,)`` → ``(T, out)``;
     differentiable. Other ranks or dtypes go to ``F.linear``."""
-    if not AVAILABLE or x.dim() != 2 or x.dtype != torch.float32 or x.shape[0] == 0:
+    if x.dim() != 2 or x.dtype != torch.float32 or x.shape[0] < ROWS_QUANTUM or not onednn_active():
         return F.linear(x, w, b)
     if torch.is_grad_enabled() and (x.requires_grad or w.requires_grad or (b is not None and b.requires_grad)):
         return _Linear.apply(x, w, b)

@@ -1,0 +1,89 @@
+"""Checkpoint files: one format for every learned method, loaded safely.
+
+A checkpoint is a plain dict of tensors and built-in types, written atomically with ``torch.save`` and read with
+``torch.load(weights_only=True)`` — a file from someone else cannot run code when loaded::
+
+    {"format": "crowdbench.checkpoint/2", "method": "h2int", "crowdbench_version": "0.2.0",
+     "model": {...architecture config...}, "n_max": 30, "actor": state_dict, ...}
+
+Training checkpoints add the critic, optimiser, environment and RNG state needed to resume exactly
+(:mod:`crowdbench.training.trainer`). Files of the previous H²INT format (``crowdbench.h2int/1``) still load for
+evaluation (:data:`LEGACY_FORMATS`); they cannot be resumed.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+FORMAT = "crowdbench.checkpoint/2"
+LEGACY_FORMATS = {"crowdbench.h2int/1": "h2int"}
+"""Older formats that still load for evaluation, with the method they hold."""
+SHIPPED = Path(__file__).resolve().parent / "policies"
+"""Shipped checkpoints are package data: ``policies/<method>/checkpoints/<name>.pt``."""
+
+
+def shipped(method: str, name: str) -> str:
+    """Path of the shipped checkpoint ``name`` (e.g. ``"h2int"``, ``"meanpool"``) of ``method``."""
+    return os.fspath(SHIPPED / method / "checkpoints" / f"{name}.pt")
+
+
+def shipped_names(method: str) -> list[str]:
+    """The shipped checkpoints of ``method`` (names without ``.pt``)."""
+    folder = SHIPPED / method / "checkpoints"
+    return sorted(p.stem for p in folder.glob("*.pt")) if folder.is_dir() else []
+
+
+def resolve(method: str, checkpoint: str | os.PathLike | None) -> str:
+    """A checkpoint path from a path, the name of a shipped checkpoint of ``method``, or ``None`` (the method's
+    default shipped checkpoint, named like the method)."""
+    if checkpoint is None:
+        return shipped(method, method)
+    path = os.fspath(checkpoint)
+    if not os.path.exists(path) and path in shipped_names(method):
+        return shipped(method, path)
+    return path
+
+
+def load(path: str | os.PathLike, method: str | None = None) -> dict[str, Any]:
+    """Load and validate a checkpoint (``weights_only=True``); ``method`` checks what it holds.
+
+    Raises:
+        ValueError: missing file, not a crowdbench checkpoint, a file that would need to run code to load, or a
+            checkpoint of another method — one line naming the problem and what was expected.
+    """
+    import pickle
+
+    import torch
+
+    path = os.fspath(path)
+    if not os.path.exists(path):
+        raise ValueError(f"checkpoint {path!r} not found; pass --checkpoint PATH or one of the shipped names "
+                         f"({', '.join(shipped_names(method or 'h2int')) or 'none'})")
+    try:
+        ckpt = torch.load(path, map_location="cpu", weights_only=True)
+    except pickle.UnpicklingError as e:
+        raise ValueError(f"checkpoint {path!r} refused: it holds objects that would run code when loaded "
+                         f"(torch.load weights_only=True: {str(e).splitlines()[0]})") from None
+    except Exception as e:  # noqa: BLE001 - a corrupt or foreign file: one clear line
+        raise ValueError(f"checkpoint {path!r} could not be read ({type(e).__name__}: {e})") from None
+    fmt = ckpt.get("format") if isinstance(ckpt, dict) else None
+    if fmt in LEGACY_FORMATS:
+        ckpt = {**ckpt, "method": LEGACY_FORMATS[fmt]}
+    elif fmt != FORMAT:
+        raise ValueError(f"checkpoint {path!r} is not a crowdbench checkpoint (format={fmt!r}; expected {FORMAT!r})")
+    if method is not None and ckpt.get("method") != method:
+        raise ValueError(f"checkpoint {path!r} holds method {ckpt.get('method')!r}, not {method!r}")
+    return ckpt
+
+
+def save(ckpt: dict[str, Any], path: str | os.PathLike) -> str:
+    """Write ``ckpt`` atomically (temporary file + rename) with ``torch.save``; returns the path."""
+    import torch
+
+    from crowdbench.io import atomic_path
+
+    with atomic_path(path, suffix=".pt") as tmp:
+        torch.save(ckpt, tmp)
+    return os.fspath(path)

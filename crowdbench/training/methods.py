@@ -1,0 +1,55 @@
+"""The contract between a learned method and the generic PPO training path, and the registry of such methods.
+
+A method (H²INT today; DS-RNN and AIG-GST next) says what its network is and how it is evaluated; everything else —
+the batched worlds, the rollout in the world processes, the per-thread PPO update, the curriculum, checkpoints and
+exact resume, progress and plots — is :mod:`crowdbench.training`'s. Register a method by name::
+
+    from crowdbench.training.methods import PPO_METHODS
+    PPO_METHODS.register("mine", "my_pkg.training:MyMethod")    # or the entry-point group crowdbench.ppo_methods
+
+after which ``crowdbench train mine`` trains it. Value-based methods (CADRL, SARL: imitation, then TD learning) do
+not use PPO; their training lives beside this one (:mod:`crowdbench.training.value`).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from typing import Any, ClassVar
+
+from crowdbench.registry import Registry
+
+
+class PPOMethod(ABC):
+    """A learned robot policy trained by :class:`~crowdbench.training.trainer.Trainer`.
+
+    Class attributes:
+        name: Registry name (also the ``method`` field of its checkpoints).
+        model_config: Frozen dataclass of the architecture (every field documented); stored in checkpoints.
+        actor_class: The rsl-rl actor, a :class:`~crowdbench.training.models.RecurrentTrunkActor`.
+        observation: Robot observation the actor reads (``relative`` or ``full_state``).
+    """
+
+    name: ClassVar[str]
+    model_config: ClassVar[type]
+    actor_class: ClassVar[type]
+    observation: ClassVar[str] = "relative"
+
+    @abstractmethod
+    def actor_cfg(self, model: Any) -> dict[str, Any]:
+        """Keyword arguments of :attr:`actor_class` for architecture ``model``."""
+
+    @abstractmethod
+    def critic_cfg(self, model: Any) -> dict[str, Any]:
+        """Keyword arguments of the value head (:class:`~crowdbench.training.models.SharedTrunkCritic`)."""
+
+    @abstractmethod
+    def policy(self, config: Any, actor: Any) -> Any:
+        """The deterministic :class:`~crowdbench.policies.RobotPolicy` of a live ``actor`` (quick evaluations)."""
+
+    def label(self, model: Any) -> str:
+        """Short name of a run's architecture (plots, default run folder)."""
+        return self.name
+
+
+PPO_METHODS: Registry[PPOMethod] = Registry("PPO method", "crowdbench.ppo_methods")
+PPO_METHODS.register("h2int", "crowdbench.policies.h2int.training:H2INTMethod")
