@@ -3,7 +3,7 @@
 Source of truth: the reference C++ library, RVO2 2.0.x (``Agent::computeNeighbors``, ``Agent::computeNewVelocity``,
 ``linearProgram1/2/3``, ``KdTree::queryObstacleTreeRecursive``, ``RVOSimulator::addObstacle``). Differences:
 
-* computed in float64 (the C++ library uses float32; see ``shared/reference/orca`` for the tolerances this meets);
+* computed in float64 (the C++ library uses float32; see ``tests/data/README.md`` for the tolerances this meets);
 * neighbours are found by brute force instead of kd-trees. The result is the same set — the ``max_neighbors``
   nearest agents strictly within ``neighbor_dist`` sorted by squared distance, and the obstacle edges within
   ``time_horizon_obst * max_speed + radius`` seen from their right side — only exact distance *ties* may be ordered
