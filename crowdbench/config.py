@@ -55,6 +55,12 @@ class WorldConfig:
     """Robot preferred (and maximum) speed [m/s]."""
     human_v_pref: float = 1.0
     """Pedestrian preferred (and maximum) speed [m/s]."""
+    human_radius_range: tuple[float, float] | None = None
+    """If set, each pedestrian's radius is drawn per episode from U(lo, hi) instead of ``human_radius``
+    (CrowdNav++'s ``randomize_attributes``: (0.3, 0.5)) [m]."""
+    human_v_pref_range: tuple[float, float] | None = None
+    """If set, each pedestrian's preferred speed is drawn per episode from U(lo, hi) instead of ``human_v_pref``
+    (CrowdNav++: (0.5, 1.5), capped at 1 m/s by its ORCA) [m/s]."""
     sensing_range: float = 5.0
     """Robot sensing range: pedestrians whose centre is farther are not observed [m]."""
     human_sensing_range: float = 5.0
@@ -87,6 +93,10 @@ class WorldConfig:
             lo, hi = self.humans_range
             if not 0 <= lo <= hi:
                 raise ValueError(f"humans_range must satisfy 0 ≤ lo ≤ hi, got {self.humans_range}")
+        for name in ("human_radius_range", "human_v_pref_range"):
+            rng = getattr(self, name)
+            if rng is not None and not (len(rng) == 2 and 0 < rng[0] <= rng[1]):
+                raise ValueError(f"{name}={rng!r}; valid choices: None or (lo, hi) with 0 < lo ≤ hi")
         for k, poly in enumerate(self.obstacles):
             if len(poly) < 2:
                 raise ValueError(f"obstacles[{k}] needs ≥ 2 vertices, got {len(poly)}")
@@ -95,6 +105,11 @@ class WorldConfig:
     def max_humans(self) -> int:
         """Pedestrian slots per world (the padded array size ``H``)."""
         return self.humans_range[1] if self.humans_range is not None else self.num_humans
+
+    @property
+    def max_human_radius(self) -> float:
+        """Largest pedestrian radius an episode can draw [m] (placement clearances use it)."""
+        return self.human_radius if self.human_radius_range is None else float(self.human_radius_range[1])
 
     @property
     def max_steps(self) -> int:

@@ -19,27 +19,35 @@ from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
 
 @dataclass(frozen=True)
 class ORCAParams:
-    """ORCA parameters (CrowdNav's defaults)."""
+    """ORCA parameters: CrowdNav++'s pedestrians (the paper's observation and reward follow CrowdNav++): CrowdNav's
+    horizons and neighbour distance, a 0.15 m safety space and every agent a neighbour. CrowdNav's original
+    pedestrians: ``safety_space=0, max_neighbors=10`` (calibration in ``leaderboards/README.md``)."""
 
     neighbor_dist: float = 10.0
     """Neighbours are searched within this distance [m]."""
-    max_neighbors: int = 10
-    """At most this many agent neighbours [-]."""
+    max_neighbors: int | None = None
+    """At most this many agent neighbours; ``None`` = every agent within ``neighbor_dist`` (CrowdNav++) [-]."""
     time_horizon: float = 5.0
     """Agent–agent avoidance horizon [s]."""
     time_horizon_obst: float = 5.0
     """Agent–obstacle avoidance horizon [s]."""
     radius_pad: float = 0.01
     """Added to every agent's radius inside ORCA (CrowdNav's ``radius + 0.01``) [m]."""
-    safety_space: float = 0.0
-    """Extra clearance added to every radius inside ORCA [m]."""
+    safety_space: float = 0.15
+    """Extra clearance added to every radius inside ORCA [m] (CrowdNav++: 0.15 for pedestrians and robot)."""
 
     def __post_init__(self) -> None:
         for name in ("neighbor_dist", "time_horizon", "time_horizon_obst"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
-        if self.max_neighbors < 0:
-            raise ValueError(f"max_neighbors must be ≥ 0, got {self.max_neighbors}")
+        if self.max_neighbors is not None and self.max_neighbors < 0:
+            raise ValueError(f"max_neighbors must be ≥ 0 or None (every agent), got {self.max_neighbors}")
+        if self.safety_space < 0:
+            raise ValueError(f"safety_space must be ≥ 0, got {self.safety_space}")
+
+    def neighbors(self, num_agents: int) -> int:
+        """The neighbour cap for a world of ``num_agents`` agents."""
+        return num_agents if self.max_neighbors is None else self.max_neighbors
 
 
 class ORCABase(HumanModel):
@@ -53,7 +61,7 @@ class ORCABase(HumanModel):
         p, B, A = self.params, num_worlds, num_humans + 1
         self._obst = build_obstacles(obstacles) if obstacles else build_obstacles([])
         self._nd = np.full((B, A), p.neighbor_dist)
-        self._mn = np.full((B, A), p.max_neighbors, dtype=np.int64)
+        self._mn = np.full((B, A), p.neighbors(A), dtype=np.int64)
         self._th = np.full((B, A), p.time_horizon)
         self._tho = np.full((B, A), p.time_horizon_obst)
         self._controlled = np.ones((B, A), dtype=bool)

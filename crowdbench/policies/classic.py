@@ -28,16 +28,14 @@ class LinearPolicy(RobotPolicy):
 @register("orca")
 class ORCAPolicy(RobotPolicy):
     """The robot runs RVO2 ORCA among the observed pedestrians (full state: positions, velocities, radii),
-    as CrowdNav's ORCA baseline; it assumes the pedestrians reciprocate. Keyword arguments: :class:`ORCAParams`;
-    ``safety_space`` defaults to CrowdNav++'s 0.15 m for the robot (with 0 m it grazes pedestrians in dense
-    crossings: 26 % success among 20 ORCA pedestrians vs 93 % with 0.15 m, seeds 0–99). Static obstacles given in
-    ``config.obstacles`` are avoided too."""
+    as CrowdNav's ORCA baseline; it assumes the pedestrians reciprocate. Keyword arguments: :class:`ORCAParams`
+    (CrowdNav++'s: safety space 0.15 m — with 0 m it grazes pedestrians in dense crossings — every pedestrian a
+    neighbour). Static obstacles given in ``config.obstacles`` are avoided too."""
 
     observation = "full_state"
 
     def __init__(self, config=None, **params) -> None:
         super().__init__(config)
-        params.setdefault("safety_space", 0.15)
         self.params = ORCAParams(**params)
         self._obst = build_obstacles(self.config.obstacles)
 
@@ -60,7 +58,7 @@ class ORCAPolicy(RobotPolicy):
         controlled[:, 0] = True
         out = np.empty((B, A, 2))
         orca_batch(pos, vel, pref, rad, vmax, np.full((B, A), p.neighbor_dist),
-                   np.full((B, A), p.max_neighbors, np.int64), np.full((B, A), p.time_horizon),
+                   np.full((B, A), p.neighbors(A), np.int64), np.full((B, A), p.time_horizon),
                    np.full((B, A), p.time_horizon_obst), active, controlled, np.full((B, A), -1, np.int64),
                    *self._obst, cfg.time_step, out)
         return out[:, 0]

@@ -23,6 +23,7 @@ register = LAYOUTS.register
 
 PLACEMENT_GAP = 0.2
 """Extra clearance between any two start positions (and any two goals) at placement [m] (CrowdNav's discomfort_dist)."""
+ROBOT_MODES = ("fixed", "random")
 
 
 class Layout(ABC):
@@ -40,6 +41,54 @@ class Layout(ABC):
     half_size: float = 7.0
     separate_goals: ClassVar[bool] = True
     """Whether goals must be as far apart as starts (False for layouts whose goals lie on a shared exit line)."""
+    robot: str = "fixed"
+    """``fixed``: the robot crosses from :attr:`robot_start` to :attr:`robot_goal` every episode; ``random``: start
+    and goal drawn per episode uniformly in ``[-robot_area, robot_area]²``, at least ``robot_min_distance`` apart
+    (CrowdNav++), so no single route can be memorised."""
+    robot_area: float = 6.0
+    """Half-width of the square the random robot start and goal are drawn in [m]."""
+    robot_min_distance: float = 8.0
+    """Smallest start–goal distance of a random robot crossing [m]."""
+    goal_change_interval: float = 0.0
+    """Every this many seconds each pedestrian takes a new goal (:meth:`changed_goals`) with probability
+    :attr:`goal_change_prob` (CrowdNav++: 5 s, 0.5); 0 = never [s]."""
+    goal_change_prob: float = 0.0
+    """Probability of a goal change at each :attr:`goal_change_interval` [-]."""
+
+    def configure_robot(self, robot: str = "fixed", robot_area: float = 6.0, robot_min_distance: float = 8.0) -> None:
+        """Set the robot's start/goal rule (see :attr:`robot`); validates the arguments."""
+        if robot not in ROBOT_MODES:
+            raise ValueError(f"robot={robot!r}; valid choices: {', '.join(ROBOT_MODES)}")
+        if not 0 < robot_min_distance <= 2 * math.sqrt(2) * robot_area * 0.95:
+            raise ValueError(f"robot_min_distance={robot_min_distance}; valid choices: (0, "
+                             f"{2 * math.sqrt(2) * robot_area * 0.95:.2f}] for robot_area={robot_area}")
+        self.robot, self.robot_area, self.robot_min_distance = robot, float(robot_area), float(robot_min_distance)
+
+    def configure_goal_changes(self, interval: float = 0.0, prob: float = 0.0) -> None:
+        """Set the random goal changes (see :attr:`goal_change_interval`); validates the arguments."""
+        if interval < 0 or not 0.0 <= prob <= 1.0:
+            raise ValueError(f"goal_change_interval={interval}, goal_change_prob={prob}; valid choices: an interval "
+                             "≥ 0 s (0 = never) and a probability in [0, 1]")
+        self.goal_change_interval, self.goal_change_prob = float(interval), float(prob)
+
+    def robot_endpoints(self, rng: np.random.Generator, edges: np.ndarray, radius: float
+                        ) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's start and goal for one episode, ``(2,)`` each [m]. ``fixed`` draws nothing; ``random`` draws
+        batches of 64 candidate pairs and takes the first that is far enough apart and clear of the static edges
+        ``edges`` ``(S, 2, 2)`` by more than ``radius``."""
+        if self.robot == "fixed":
+            return np.asarray(self.robot_start, dtype=np.float64), np.asarray(self.robot_goal, dtype=np.float64)
+        for _ in range(64):
+            c = rng.uniform(-self.robot_area, self.robot_area, (64, 4))
+            ok = np.hypot(c[:, 0] - c[:, 2], c[:, 1] - c[:, 3]) >= self.robot_min_distance
+            if len(edges):
+                for pts in (c[:, :2], c[:, 2:]):
+                    ok &= (point_segment_distance(pts[:, None], edges[None, :, 0], edges[None, :, 1]) > radius).all(1)
+            hits = np.flatnonzero(ok)
+            if len(hits):
+                return c[hits[0], :2].copy(), c[hits[0], 2:].copy()
+        raise ValueError(f"layout {self.name!r}: no robot start/goal {self.robot_min_distance} m apart found clear of "
+                         "the obstacles; lower robot_min_distance")
 
     def obstacles(self) -> tuple[Polygon, ...]:
         """Static obstacles of the layout (vertex lists, metres); none by default."""
@@ -60,6 +109,17 @@ class Layout(ABC):
         them (one call per world) so that this method is vectorised over all worlds at once.
         """
 
+    def changed_goals(self, u: np.ndarray, positions: np.ndarray, goals: np.ndarray) -> np.ndarray:
+        """New goals ``(k, 2)`` of a random goal change (``u`` ``(k, renew_uniforms)``); default: :meth:`renew_goals`."""
+        return self.renew_goals(u, positions, goals)
+
+    respawn: ClassVar[bool] = False
+    """Whether a pedestrian reaching its goal is re-spawned (:meth:`respawn_candidates`) rather than given a new goal."""
+
+    def respawn_candidates(self, rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
+        """``m`` candidate (start, goal) pairs for a re-spawned pedestrian (default: :meth:`candidates`)."""
+        return self.candidates(rng, 0, 1, m)
+
     def sample(
         self,
         rng: np.random.Generator,
@@ -67,9 +127,11 @@ class Layout(ABC):
         human_radius: float,
         robot_radius: float,
         obstacles: Sequence[Polygon] = (),
+        robot_points: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray]:
-        """Place ``n`` pedestrians without overlap; returns ``(starts, goals)``, each ``(n, 2)`` [m]."""
-        return place_without_overlap(self, rng, n, human_radius, robot_radius, obstacles)
+        """Place ``n`` pedestrians without overlap; returns ``(starts, goals)``, each ``(n, 2)`` [m]. ``robot_points``
+        ``(2, 2)``: this episode's robot start and goal (default: the fixed ones)."""
+        return place_without_overlap(self, rng, n, human_radius, robot_radius, obstacles, robot_points=robot_points)
 
 
 def _inside_polygons(points: np.ndarray, obstacles: Sequence[Polygon]) -> np.ndarray:
@@ -111,6 +173,7 @@ def place_without_overlap(
     obstacles: Sequence[Polygon] = (),
     pool: int = 32,
     rounds: int = 48,
+    robot_points: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Greedy bounded dart-throwing.
 
@@ -121,7 +184,8 @@ def place_without_overlap(
     """
     starts = np.empty((n, 2))
     goals = np.empty((n, 2))
-    robot_pts = np.array([layout.robot_start, layout.robot_goal], dtype=np.float64)
+    robot_pts = (np.array([layout.robot_start, layout.robot_goal], dtype=np.float64) if robot_points is None
+                 else np.ascontiguousarray(robot_points, dtype=np.float64))
     d_hh = 2 * human_radius + PLACEMENT_GAP
     d_hr = human_radius + robot_radius + PLACEMENT_GAP
     edges = obstacle_edges(obstacles)
@@ -149,19 +213,43 @@ def place_without_overlap(
     return starts, goals
 
 
+ARRIVALS = ("turn", "respawn")
+
+
 @register("circle_crossing")
 class CircleCrossing(Layout):
-    """Training layout. Pedestrians start on a circle of radius ``radius`` (6 m) centred at the origin, each
-    coordinate perturbed by U(-noise, noise) (0.5 m); goals are antipodal (``goal = -start``). The robot crosses from
-    (0, -6) to (0, 6). A pedestrian reaching its goal is sent to a new point on the circle at a uniformly random angle
-    within ±45° of the antipode of where it stands, so the centre stays busy all episode.
+    """Training layout: pedestrians cross a circle through its centre; by default as in CrowdNav++.
+
+    Pedestrians start on a circle of radius ``radius`` centred at the origin, each coordinate perturbed by
+    U(−noise, noise); goals are antipodal (``goal = −start``). ``arrival="respawn"``: a pedestrian reaching its goal
+    is replaced by a new one at a fresh circle start (CrowdNav++); ``"turn"``: it is sent to a new point on the circle
+    at a uniformly random angle within ±45° of the antipode of where it stands. Random goal changes
+    (``goal_change_interval``, ``goal_change_prob``) pick a uniform point on the circle, each coordinate perturbed by
+    U(−v/2, v/2) with v = 1 m/s (CrowdNav++). The robot: see :attr:`Layout.robot`.
+
+    Args:
+        radius: Circle radius [m] (CrowdNav++: 6√2 ≈ 8.49; ``legacy`` geometry: 6).
+        noise: Half-width of the start noise per coordinate [m] (CrowdNav++ adds U(0, 2), one-sided — the same
+            spread shifted by +1 m; symmetric here so the crowd stays centred).
+        arrival: ``respawn`` or ``turn``.
+        robot, robot_area, robot_min_distance: The robot's start/goal rule (:meth:`Layout.configure_robot`).
+        goal_change_interval, goal_change_prob: Random goal changes [s], [-].
     """
 
     name = "circle_crossing"
 
-    def __init__(self, radius: float = 6.0, noise: float = 0.5) -> None:
-        self.radius, self.noise = radius, noise
-        self.half_size = radius + 1.0
+    def __init__(self, radius: float = 6 * math.sqrt(2), noise: float = 1.0, arrival: str = "respawn",
+                 robot: str = "random", robot_area: float = 6.0, robot_min_distance: float = 8.0,
+                 goal_change_interval: float = 5.0, goal_change_prob: float = 0.5) -> None:
+        if not radius > 0 or noise < 0:
+            raise ValueError(f"radius={radius}, noise={noise}; valid choices: radius > 0 [m], noise ≥ 0 [m]")
+        if arrival not in ARRIVALS:
+            raise ValueError(f"arrival={arrival!r}; valid choices: {', '.join(ARRIVALS)}")
+        self.radius, self.noise, self.arrival = float(radius), float(noise), arrival
+        self.respawn = arrival == "respawn"
+        self.configure_robot(robot, robot_area, robot_min_distance)
+        self.configure_goal_changes(goal_change_interval, goal_change_prob)
+        self.half_size = max(radius + noise, robot_area) + 1.0
 
     def candidates(self, rng, index, n, m):
         ang = rng.uniform(0.0, 2 * math.pi, m)
@@ -173,6 +261,26 @@ class CircleCrossing(Layout):
     def renew_goals(self, u, positions, goals):
         ang = np.arctan2(-positions[:, 1], -positions[:, 0]) + (u[:, 0] - 0.5) * (math.pi / 2)
         return self.radius * np.stack([np.cos(ang), np.sin(ang)], 1) + (u[:, 1:3] - 0.5) * (2 * self.noise)
+
+    def changed_goals(self, u, positions, goals):
+        ang = u[:, 0] * 2 * math.pi
+        return self.radius * np.stack([np.cos(ang), np.sin(ang)], 1) + (u[:, 1:3] - 0.5)
+
+
+@register("circle_crossing_legacy")
+class CircleCrossingLegacy(CircleCrossing):
+    """crowdbench ≤ 0.2's circle crossing, kept for comparison: circle radius 6 m, noise ±0.5 m, the robot always
+    from (0, −6) to (0, 6) on the pedestrians' own ring, pedestrians turn round near the antipode on arrival, no
+    random goal changes. A learned policy can memorise one route here (see ``leaderboards/README.md``)."""
+
+    name = "circle_crossing_legacy"
+
+    def __init__(self, radius: float = 6.0, noise: float = 0.5, arrival: str = "turn", robot: str = "fixed",
+                 robot_area: float = 6.0, robot_min_distance: float = 8.0, goal_change_interval: float = 0.0,
+                 goal_change_prob: float = 0.0) -> None:
+        super().__init__(radius, noise, arrival, robot, robot_area, robot_min_distance, goal_change_interval,
+                         goal_change_prob)
+        self.half_size = radius + 1.0
 
 
 @register("square_crossing")
@@ -215,6 +323,9 @@ class _Streams(Layout):
     lane_half_width = 3.5
     separate_goals = False
 
+    def __init__(self, robot: str = "random", robot_area: float = 6.0, robot_min_distance: float = 8.0) -> None:
+        self.configure_robot(robot, robot_area, robot_min_distance)
+
     def _depth(self, n_stream: int) -> float:
         # random sequential placement fills ~half the area: give each pedestrian ~3.5 spacing² of band
         return float(min(self.extent, max(2.0, 3.5 * n_stream * 0.8**2 / (2 * self.lane_half_width))))
@@ -242,8 +353,9 @@ class _Streams(Layout):
 @register("intersection")
 class Intersection(_Streams):
     """Test-only. Two orthogonal streams crossing a 12 m square: even-indexed pedestrians walk west→east in the band
-    ``|y| ≤ 3.5`` m, odd-indexed ones north→south in the band ``|x| ≤ 3.5`` m, each entering from its boundary;
-    the robot crosses both from (0, -6) to (0, 6).
+    ``|y| ≤ 3.5`` m, odd-indexed ones north→south in the band ``|x| ≤ 3.5`` m, each entering from its boundary.
+    The robot's start and goal are drawn per episode (``robot="random"``, the default; ``"fixed"``: from (0, −6) to
+    (0, 6)).
     """
 
     name = "intersection"
@@ -257,8 +369,8 @@ class Intersection(_Streams):
 @register("split_flow")
 class SplitFlow(_Streams):
     """Test-only. Opposing horizontal traffic: even-indexed pedestrians enter from the west boundary and walk east,
-    odd-indexed ones from the east walking west, all in the band ``|y| ≤ 3.5`` m; the robot crosses the flow from
-    (0, -6) to (0, 6).
+    odd-indexed ones from the east walking west, all in the band ``|y| ≤ 3.5`` m. The robot's start and goal are
+    drawn per episode (``robot="random"``, the default; ``"fixed"``: across the flow from (0, −6) to (0, 6)).
     """
 
     name = "split_flow"
@@ -272,14 +384,17 @@ class SplitFlow(_Streams):
 @register("random_wander")
 class RandomWander(Layout):
     """Test-only. Starts and goals uniform over the square ``[-a, a]²`` (a = 5.5 m); a reached goal is replaced by
-    another uniform point of that square.
+    another uniform point of that square. The robot's start and goal are drawn per episode (``robot="random"``, the
+    default; ``"fixed"``: from (0, −6) to (0, 6)).
     """
 
     name = "random_wander"
     half_size = 7.0
 
-    def __init__(self, extent: float = 5.5) -> None:
+    def __init__(self, extent: float = 5.5, robot: str = "random", robot_area: float = 6.0,
+                 robot_min_distance: float = 8.0) -> None:
         self.extent = extent
+        self.configure_robot(robot, robot_area, robot_min_distance)
 
     def _uniform(self, rng, m: int) -> np.ndarray:
         return rng.uniform(-self.extent, self.extent, (m, 2))

@@ -73,7 +73,7 @@ class PymunkWorlds:
     def _build(radii: np.ndarray, obstacles: Sequence[Polygon]) -> pymunk.Space:
         space = pymunk.Space()
         space.collision_slop = 0.005  # metres, not pixels
-        bodies = []
+        bodies, shapes = [], []
         for a, r in enumerate(radii):
             body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
             shape = pymunk.Circle(body, float(r))
@@ -81,6 +81,7 @@ class PymunkWorlds:
             shape.filter = pymunk.ShapeFilter(group=AGENT_GROUP)
             space.add(body, shape)
             bodies.append(body)
+            shapes.append(shape)
         for poly in obstacles:
             if len(poly) == 2:
                 space.add(pymunk.Segment(space.static_body, poly[0], poly[1], 0.0))
@@ -92,7 +93,14 @@ class PymunkWorlds:
         if order[: len(bodies)] != [b.id for b in bodies] or order[len(bodies):] not in ([], [space.static_body.id]):
             raise RuntimeError("pymunk.batch visits bodies in an unexpected order; cannot synchronise the world")
         space.agent_bodies = bodies
+        space.agent_shapes = shapes
         return space
+
+    def set_radii(self, world: int, radii: np.ndarray) -> None:
+        """Give the agents of world ``world`` the radii ``(A,)`` [m] (episodes with drawn pedestrian sizes)."""
+        for shape, r in zip(self.spaces[world].agent_shapes, radii, strict=True):
+            if shape.radius != r:
+                shape.unsafe_set_radius(float(r))
 
     def _data(self, rows: np.ndarray, field: pmb.BodyFields):
         fa = lib.pmFloatArrayNew(0)

@@ -114,6 +114,7 @@ class CrowdWorld:
         self._park = np.stack([park_x, park_y], -1)  # (B, A, 2): distinct, far-away slots
 
         self.physics = PymunkWorlds(self.radius[0], self.obstacles, B)
+        self._change_every = round(self.layout.goal_change_interval / self.dt) if self.layout.goal_change_interval else 0
         self.human_model.bind(B, H, self.obstacles, self.dt)
         self.reset(seeds=list(range(B)))
         self.physics.verify()
@@ -122,6 +123,8 @@ class CrowdWorld:
         from crowdbench.geometry import point_segment_distance
         from crowdbench.worlds.layouts import _inside_polygons
 
+        if self.layout.robot != "fixed":  # drawn per episode, clear of the obstacles (Layout.robot_endpoints)
+            return
         pts = np.array([self.layout.robot_start, self.layout.robot_goal], dtype=np.float64)
         if len(self.edges):
             d = point_segment_distance(pts[:, None], self.edges[None, :, 0], self.edges[None, :, 1]).min(axis=1)
@@ -170,13 +173,16 @@ class CrowdWorld:
             self.model_rngs[b] = rng.spawn(1)[0]
             n = cfg.num_humans if cfg.humans_range is None else int(rng.integers(cfg.humans_range[0],
                                                                                    cfg.humans_range[1] + 1))
-            starts, goals = lay.sample(rng, n, cfg.human_radius, cfg.robot_radius, self.obstacles)
+            r_start, r_goal = lay.robot_endpoints(rng, self.edges, cfg.robot_radius)
+            starts, goals = lay.sample(rng, n, cfg.max_human_radius, cfg.robot_radius, self.obstacles,
+                                       robot_points=np.stack([r_start, r_goal]))
             self.pos[b] = self._park[b]
             self.goal[b] = self._park[b]
-            self.pos[b, 0], self.goal[b, 0] = lay.robot_start, lay.robot_goal
+            self.pos[b, 0], self.goal[b, 0] = r_start, r_goal
             self.pos[b, 1:n + 1], self.goal[b, 1:n + 1] = starts, goals
             self.active[b] = False
             self.active[b, :n + 1] = True
+            self._draw_attributes(b, rng, slice(1, n + 1))
         d = self.goal[idx] - self.pos[idx]
         self.heading[idx] = np.arctan2(d[..., 1], d[..., 0])
         self.vel[idx] = 0.0
@@ -184,6 +190,17 @@ class CrowdWorld:
         self.prev_goal_dist[idx] = self.goal_distance()[idx]
         self.physics.set_positions(idx, self.pos[idx])
         self.human_model.reset(idx, self.model_rngs, self.crowd_state())
+
+    def _draw_attributes(self, b: int, rng: np.random.Generator, slots: slice | np.ndarray) -> None:
+        """Per-pedestrian radius and preferred speed of world ``b``'s agents ``slots`` (drawn when the config gives
+        ranges: CrowdNav++'s randomised attributes; pymunk's shapes follow)."""
+        cfg = self.config
+        if cfg.human_radius_range is not None:
+            k = len(self.radius[b, slots])
+            self.radius[b, slots] = rng.uniform(*cfg.human_radius_range, k)
+            self.physics.set_radii(b, self.radius[b])
+        if cfg.human_v_pref_range is not None:
+            self.v_pref[b, slots] = rng.uniform(*cfg.human_v_pref_range, len(self.v_pref[b, slots]))
 
     def set_agents(self, world: int, positions: np.ndarray | None = None, velocities: np.ndarray | None = None,
                    goals: np.ndarray | None = None) -> None:
@@ -293,6 +310,8 @@ class CrowdWorld:
         overlaps = pair_overlaps(self.pos[:, 1:], self.radius[:, 1:], self.active[:, 1:])
         if self.num_humans:
             self._renew_goals()
+            if self._change_every:
+                self._change_goals()
         return StepResult(reward, terms, terminated, truncated, outcome, d_min, overlaps, robot_hit)
 
     def _renew_goals(self) -> None:
@@ -304,6 +323,9 @@ class CrowdWorld:
         if not reached.any():
             return
         bi, hi = np.nonzero(reached)  # sorted by world, then pedestrian
+        if self.layout.respawn:
+            self._respawn(bi, hi + 1)
+            return
         m = self.layout.renew_uniforms
         if m:
             worlds, counts = np.unique(bi, return_counts=True)
@@ -311,6 +333,41 @@ class CrowdWorld:
         else:
             u = np.empty((len(bi), 0))
         self.goal[bi, hi + 1] = self.layout.renew_goals(u, self.pos[bi, hi + 1], self.goal[bi, hi + 1])
+
+
+    def _respawn(self, bi: np.ndarray, ai: np.ndarray) -> None:
+        """Replace agents ``ai`` of worlds ``bi`` (pedestrians that reached their goal) by new ones at a fresh start
+        of the layout (CrowdNav++): the first of 16 candidates clear of every other active agent by both radii +
+        :data:`~crowdbench.worlds.layouts.PLACEMENT_GAP` (else the last candidate), new attributes if drawn, at
+        rest. The slot's pedestrian-model state (e.g. its responsiveness) carries over."""
+        from crowdbench.worlds.layouts import PLACEMENT_GAP
+
+        for b in np.unique(bi):
+            rng = self.rngs[b]
+            for a in ai[bi == b]:
+                self._draw_attributes(b, rng, np.array([a]))
+                s, g = self.layout.respawn_candidates(rng, 16)
+                others = self.active[b].copy()
+                others[a] = False
+                need = self.radius[b, a] + self.radius[b, others] + PLACEMENT_GAP
+                d = np.linalg.norm(s[:, None] - self.pos[b, others][None], axis=-1)
+                ok = np.flatnonzero((d >= need).all(axis=1))
+                k = ok[0] if len(ok) else len(s) - 1
+                self.pos[b, a], self.goal[b, a], self.vel[b, a] = s[k], g[k], 0.0
+            self.physics.set_positions(np.array([b]), self.pos[b][None])
+
+    def _change_goals(self) -> None:
+        """Random goal changes: in worlds whose episode step is a multiple of the layout's interval, each active
+        pedestrian takes a new goal (:meth:`Layout.changed_goals`) with the layout's probability."""
+        worlds = np.flatnonzero(self.steps % self._change_every == 0)
+        m, p = self.layout.renew_uniforms, self.layout.goal_change_prob
+        for b in worlds:
+            slots = np.flatnonzero(self.active[b, 1:]) + 1
+            u = self.rngs[b].random((len(slots), 1 + m))
+            change = slots[u[:, 0] < p]
+            if len(change):
+                self.goal[b, change] = self.layout.changed_goals(u[u[:, 0] < p, 1:], self.pos[b, change],
+                                                                 self.goal[b, change])
 
 
 def _clip_norm(v: np.ndarray, vmax: np.ndarray) -> np.ndarray:

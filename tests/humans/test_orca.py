@@ -139,10 +139,15 @@ def test_facade_api_shape():
         sim.getAgentPosition(5)
 
 
-def test_world_orca_equals_facade():
+@pytest.mark.parametrize(("kwargs", "max_neighbors", "radius"), [
+    ({}, 13, 0.46),  # CrowdNav++'s pedestrians (the default): every agent a neighbour, 0.15 m safety space
+    ({"safety_space": 0.0, "max_neighbors": 10}, 10, 0.31),  # CrowdNav's
+])
+def test_world_orca_equals_facade(kwargs, max_neighbors, radius):
     """The world's batched ORCA pedestrians (robot invisible) follow exactly what PyRVOSimulator computes."""
-    w = CrowdWorld(WorldConfig(num_humans=12, robot_visible=False, time_limit=1e9), 1, "circle_crossing", "orca")
-    sim = PyRVOSimulator(0.25, 10, 10, 5, 5, 0.31, 1.0)
+    w = CrowdWorld(WorldConfig(num_humans=12, robot_visible=False, time_limit=1e9), 1, "circle_crossing_legacy",
+                   "orca", kwargs)
+    sim = PyRVOSimulator(0.25, 10, max_neighbors, 5, 5, radius, 1.0)
     for i in range(12):
         sim.addAgent(tuple(w.pos[0, i + 1]))
     for _ in range(120):

@@ -12,7 +12,7 @@ from crowdbench.worlds import CrowdWorld
 def test_social_force_pedestrians_never_pass_through_walls():
     walls = [((-3.0, -0.5), (3.0, -0.5)), ((-2.0, 1.5), (2.0, 1.5), (2.0, 2.0), (-2.0, 2.0))]
     cfg = make_config(num_humans=20, obstacles=walls, arena_walls=True, time_limit=1e9, robot_visible=False)
-    w = CrowdWorld(cfg, 4, "circle_crossing", "social_force")
+    w = CrowdWorld(cfg, 4, "circle_crossing_legacy", "social_force")
     for _ in range(240):
         prev = w.pos.copy()
         w.step(np.zeros((4, 2)))

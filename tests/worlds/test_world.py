@@ -14,7 +14,7 @@ from crowdbench.worlds import COLLISION, LAYOUTS, RUNNING, SUCCESS, TIMEOUT, Cro
 
 def scripted_world(num_humans=1, **cfg):
     """A world whose humans follow the (deterministic, non-reactive) linear model."""
-    return CrowdWorld(WorldConfig(num_humans=num_humans, **cfg), 1, "circle_crossing", "linear")
+    return CrowdWorld(WorldConfig(num_humans=num_humans, **cfg), 1, "circle_crossing_legacy", "linear")
 
 
 def place(world, robot, humans, robot_goal=(0.0, 6.0), human_goals=None):
@@ -157,10 +157,11 @@ def test_nothing_tunnels_through_walls(layout, n, seed, model):
         d = point_segment_distance(w.pos[:, :, None], edges[None, None, :, 0], edges[None, None, :, 1])
         act = w.active
         assert (d.min(axis=-1)[act] >= w.radius[act] - 1e-4).all()
-        # the segment each agent travelled never crosses an edge
+        # the segment each agent travelled never crosses an edge (re-spawned pedestrians teleport: not a path)
         cross = segment_segment_distance(prev[:, :, None], w.pos[:, :, None], edges[None, None, :, 0],
                                          edges[None, None, :, 1])
-        assert (cross[act] > 0).all()
+        moved = np.linalg.norm(w.pos - prev, axis=-1) <= w.v_pref * w.dt + 1e-9
+        assert (cross[act & moved] > 0).all()
         # touching an obstacle ends the robot's episode (as a collision, unless it reached its goal in that step)
         assert (r.outcome[r.robot_hit_obstacle] != RUNNING).all()
         done = r.terminated | r.truncated
@@ -250,3 +251,21 @@ def test_pedestrian_overlap_count_matches_brute_force():
     assert pair_overlaps(two, np.array([[0.3, 0.3]]), np.array([[True, True]]))[0] == 1
     assert pair_overlaps(two, np.array([[0.25, 0.25]]), np.array([[True, True]]))[0] == 0  # touching
     assert pair_overlaps(two, np.array([[0.3, 0.3]]), np.array([[True, False]]))[0] == 0
+
+
+def test_randomised_pedestrian_attributes_are_drawn_per_episode_and_reach_pymunk():
+    cfg = WorldConfig(num_humans=12, human_radius_range=(0.3, 0.5), human_v_pref_range=(0.5, 1.5))
+    w = CrowdWorld(cfg, 3, "circle_crossing", "orca")
+    w.reset(seeds=[5, 6, 7])
+    r, v = w.radius[:, 1:].copy(), w.v_pref[:, 1:].copy()
+    assert ((r >= 0.3) & (r <= 0.5)).all() and ((v >= 0.5) & (v <= 1.5)).all() and r.std() > 0.03
+    assert w.radius[:, 0].tolist() == [0.3] * 3  # the robot keeps its size
+    for b in range(3):
+        assert [s.radius for s in w.physics.spaces[b].agent_shapes] == w.radius[b].tolist()
+    for _ in range(40):
+        w.step(np.zeros((3, 2)))
+        assert (np.linalg.norm(w.vel[:, 1:], axis=-1) <= w.v_pref[:, 1:] + 1e-9).all()
+    w.reset(seeds=[5, 6, 7])
+    np.testing.assert_array_equal(w.radius[:, 1:], r)  # same seed, same people
+    with pytest.raises(ValueError, match="human_radius_range"):
+        WorldConfig(human_radius_range=(0.5, 0.3))
