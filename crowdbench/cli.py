@@ -152,6 +152,34 @@ def curves_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def panels_cmd(args: argparse.Namespace) -> int:
+    """One episode per layout, trajectories drawn (the paper's Fig. 4)."""
+    from crowdbench.panels import plot
+
+    name = args.policy_pos or args.policy or "h2int"
+    print(f"wrote {plot(name, args.out, args.humans, args.seed, args.responsiveness, args.checkpoint)}")
+    return 0
+
+
+def calibrate_cmd(args: argparse.Namespace) -> int:
+    """Classic robots' Table I/II rows under each scenario step (``crowdbench.calibration``)."""
+    from crowdbench import calibration
+
+    steps = calibration.STEPS
+    if args.steps:
+        wanted = [int(k) for k in args.steps.split(",")]
+        bad = [k for k in wanted if not 0 <= k < len(steps)]
+        if bad:
+            raise ValueError(f"--steps {bad}; valid choices: 0 … {len(steps) - 1}")
+        steps = tuple(steps[k] for k in wanted)
+    results = calibration.run(args.episodes, args.seed, args.workers, steps)
+    meta = {"command": "crowdbench " + " ".join(sys.argv[1:]), "episodes": args.episodes, "seed": args.seed}
+    if args.json:
+        calibration.save(results, args.json, meta)
+    print(calibration.markdown(results))
+    return 0
+
+
 def bench_cmd(args: argparse.Namespace) -> int:
     """Measure and print the throughput figures; write benchmarks/RESULTS.md and the throughput PNG."""
     from crowdbench.bench import main as bench_main
@@ -277,6 +305,22 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--table", type=float, default=None, metavar="BAR",
                    help="also print a markdown table: when each run's quick evaluation first reached BAR (e.g. 0.95)")
     p.set_defaults(func=curves_cmd)
+    p = sub.add_parser("panels", help="trajectory panels of one episode per layout (the paper's Fig. 4)")
+    p.add_argument("policy_pos", nargs="?", default=None, metavar="POLICY")
+    p.add_argument("--policy", default=None)
+    p.add_argument("--checkpoint", default=None)
+    p.add_argument("--humans", type=int, default=20)
+    p.add_argument("--responsiveness", type=float, default=0.5)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", default="trajectories.png")
+    p.set_defaults(func=panels_cmd)
+    p = sub.add_parser("calibrate", help="classic robots' Table I/II rows under each scenario step")
+    p.add_argument("--episodes", type=int, default=500)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--workers", type=int, default=2, help="processes")
+    p.add_argument("--steps", default=None, help="comma-separated step numbers (default: all)")
+    p.add_argument("--json", default=None, help="write the results to this JSON file")
+    p.set_defaults(func=calibrate_cmd)
     p = sub.add_parser("bench", help="measure throughput (simulator, ORCA, training, inference)")
     p.add_argument("--quick", action="store_true", help="fewer steps and repeats")
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")

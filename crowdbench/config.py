@@ -50,17 +50,23 @@ class WorldConfig:
     robot_radius: float = 0.3
     """[m]"""
     human_radius: float = 0.3
-    """[m]"""
+    """Pedestrian radius when ``human_radius_range`` is None [m]."""
     robot_v_pref: float = 1.0
     """Robot preferred (and maximum) speed [m/s]."""
     human_v_pref: float = 1.0
-    """Pedestrian preferred (and maximum) speed [m/s]."""
-    human_radius_range: tuple[float, float] | None = None
-    """If set, each pedestrian's radius is drawn per episode from U(lo, hi) instead of ``human_radius``
-    (CrowdNav++'s ``randomize_attributes``: (0.3, 0.5)) [m]."""
-    human_v_pref_range: tuple[float, float] | None = None
-    """If set, each pedestrian's preferred speed is drawn per episode from U(lo, hi) instead of ``human_v_pref``
-    (CrowdNav++: (0.5, 1.5), capped at 1 m/s by its ORCA) [m/s]."""
+    """Pedestrian preferred (and maximum) speed when ``human_v_pref_range`` is None [m/s]."""
+    human_radius_range: tuple[float, float] | None = (0.3, 0.5)
+    """Each pedestrian's radius is drawn per episode (and per re-spawn) from U(lo, hi) — CrowdNav++'s
+    ``randomize_attributes``, the calibrated default (``leaderboards/README.md``); None: every pedestrian has
+    ``human_radius`` [m]."""
+    human_v_pref_range: tuple[float, float] | None = (0.5, 1.5)
+    """Each pedestrian's preferred (and maximum) speed is drawn from U(lo, hi) (then capped at ``human_speed_cap``
+    if set) — CrowdNav++'s range, the calibrated default; None: ``human_v_pref`` [m/s]."""
+    human_speed_cap: float | None = None
+    """Upper bound on drawn pedestrian speeds. CrowdNav++ draws v_pref ~ U(0.5, 1.5) but its ORCA prefers a unit
+    velocity, so its people walk at min(v_pref, 1) m/s; with that cap (1.0) the ORCA robot does better than the
+    paper reports in the low-responsiveness and dense cells (calibration step 7), without it every cell is within
+    ±5 points — so the default is no cap (a departure from CrowdNav++ noted in the README). None: no cap [m/s]."""
     sensing_range: float = 5.0
     """Robot sensing range: pedestrians whose centre is farther are not observed [m]."""
     human_sensing_range: float = 5.0
@@ -93,6 +99,8 @@ class WorldConfig:
             lo, hi = self.humans_range
             if not 0 <= lo <= hi:
                 raise ValueError(f"humans_range must satisfy 0 ≤ lo ≤ hi, got {self.humans_range}")
+        if self.human_speed_cap is not None and not self.human_speed_cap > 0:
+            raise ValueError(f"human_speed_cap={self.human_speed_cap!r}; valid choices: None or a speed > 0 [m/s]")
         for name in ("human_radius_range", "human_v_pref_range"):
             rng = getattr(self, name)
             if rng is not None and not (len(rng) == 2 and 0 < rng[0] <= rng[1]):
@@ -105,11 +113,6 @@ class WorldConfig:
     def max_humans(self) -> int:
         """Pedestrian slots per world (the padded array size ``H``)."""
         return self.humans_range[1] if self.humans_range is not None else self.num_humans
-
-    @property
-    def max_human_radius(self) -> float:
-        """Largest pedestrian radius an episode can draw [m] (placement clearances use it)."""
-        return self.human_radius if self.human_radius_range is None else float(self.human_radius_range[1])
 
     @property
     def max_steps(self) -> int:

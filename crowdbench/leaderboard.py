@@ -68,10 +68,38 @@ def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed
     return results
 
 
+def with_pooled(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
+    """``results`` plus Table III pooled over its layouts per response regime (the paper's presentation): rows
+    ``pooled High`` etc. — rates averaged over the layouts (equal episodes each), navigation time and path length
+    averaged over all successful episodes, Δv over all episodes."""
+    import math
+
+    out = list(results)
+    for regime in REGIMES:
+        rows = [r for r in results if r["table"] == "III" and r["row"].endswith(f" {regime}")
+                and not r["row"].startswith("pooled")]
+        if len(rows) < 2:
+            continue
+        wins = [r["success_rate"] * r["episodes"] for r in rows]
+        total = sum(wins)
+
+        def by_success(key: str, rows=rows, wins=wins, total=total) -> float:
+            return sum(w * r[key] for w, r in zip(wins, rows, strict=True) if w) / total if total else math.nan
+
+        out.append({**{k: rows[0][k] for k in ("policy", "humans", "responsiveness", "seed")},
+                    "table": "III", "row": f"pooled {regime}", "layout": "+".join(r["layout"] for r in rows),
+                    "episodes": sum(r["episodes"] for r in rows),
+                    **{k: sum(r[k] for r in rows) / len(rows) for k in ("success_rate", "collision_rate",
+                                                                          "timeout_rate", "delta_v")},
+                    "nav_time": by_success("nav_time"), "path_length": by_success("path_length"),
+                    "wall_s": sum(r.get("wall_s", 0.0) for r in rows)})
+    return out
+
+
 def markdown(results: list[dict[str, Any]]) -> str:
     lines = ["| table | setting | policy | r_s % | r_c % | r_t % | t_s [s] | l_p [m] | Δv [m/s] |",
              "|---|---|---|---|---|---|---|---|---|"]
-    for r in results:
+    for r in with_pooled(results):
         lines.append(f"| {r['table']} | {r['row']} | {r['policy']} | {100 * r['success_rate']:.1f} | "
                      f"{100 * r['collision_rate']:.1f} | {100 * r['timeout_rate']:.1f} | {r['nav_time']:.2f} | "
                      f"{r['path_length']:.2f} | {r['delta_v']:.2f} |")
@@ -122,7 +150,8 @@ class Entry:
     policy: str
     kwargs: tuple[tuple[str, Any], ...] = ()
     group: str = "main"
-    """``main`` (the methods compared in Tables I–III) or ``ablation`` (H²INT variants)."""
+    """``main`` (the methods compared in Tables I–III), ``seeds`` (the reference method's other training seeds) or
+    ``ablation`` (H²INT variants)."""
 
     @property
     def slug(self) -> str:
@@ -158,8 +187,26 @@ def parse_entry(spec: str) -> Entry:
     return Entry(label, policy, (("checkpoint", ckpt),) if ckpt else ())
 
 
+def scenario_digest(tables: tuple[str, ...] = ("I", "II", "III")) -> str:
+    """SHA-256 (16 hex digits) of everything that defines the crowds of the grid: the default world config, each
+    layout's settings and the pedestrian model's parameters — a cached result is stale when the scenario changes."""
+    import hashlib
+
+    from crowdbench.config import WorldConfig
+    from crowdbench.humans import make as make_model
+    from crowdbench.worlds import make_layout
+
+    parts = [repr(WorldConfig())]
+    for layout in sorted({c.layout for c in cells(tables)}):
+        parts.append(f"{layout}: {sorted(vars(make_layout(layout)).items())}")
+    model = make_model("responsive_orca")
+    parts.append(repr(model.params) + repr(sorted((k, v) for k, v in vars(model).items() if isinstance(v, float))))
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
+
+
 def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
-    """What a cached result must match to be reused: policy, arguments, checkpoint contents, episodes, seed."""
+    """What a cached result must match to be reused: policy, arguments, checkpoint contents, episodes, seed, and the
+    scenario (:func:`scenario_digest`)."""
     import hashlib
     import os
 
@@ -174,7 +221,8 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
         with open(ckpt, "rb") as f:
             digest = hashlib.sha256(f.read()).hexdigest()
     shown = {k: (v if k != "checkpoint" or not os.path.exists(v) else os.path.relpath(v)) for k, v in kwargs.items()}
-    return {"policy": entry.policy, "kwargs": shown, "checkpoint_sha256": digest, "episodes": episodes, "seed": seed}
+    return {"policy": entry.policy, "kwargs": shown, "checkpoint_sha256": digest, "episodes": episodes, "seed": seed,
+            "scenario": scenario_digest()}
 
 
 def run_leaderboard(entries: list[Entry], out_dir: str, episodes: int = 500, seed: int = 0,
@@ -216,7 +264,8 @@ def run_leaderboard(entries: list[Entry], out_dir: str, episodes: int = 500, see
 
 TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
                 "II": "Table II — crowd size (circle crossing, non-responsive ρ = 0)",
-                "III": "Table III — unseen layouts (N = 30; trained on circle crossing only)"}
+                "III": "Table III — unseen layouts (N = 30; trained on circle crossing only; pooled = the three "
+                       "layouts together, the paper's presentation)"}
 
 
 def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[str, str] | None = None,
@@ -232,14 +281,19 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                 "method meets the same crowds). Cells: success r_s / collision r_c / timeout r_t [%], navigation "
                 "time t_s [s] of successful episodes. Regenerate with `crowdbench leaderboard`; per-method files "
                 "hold path length and Δv too.", ""]
-    for group in ("main", "ablation"):
+    board = {lb: with_pooled(rows) for lb, rows in board.items()}
+    for group in ("main", "seeds", "ablation"):
         labels = [lb for lb in board if groups.get(lb, "main") == group]
         if not labels:
             continue
-        if group == "ablation" and reference in board and reference not in labels:
+        if group != "main" and reference in board and reference not in labels:
             labels.insert(0, reference)
         if group == "ablation":
             out += ["## Ablations", ""]
+        if group == "seeds":
+            out += [f"## {reference} across training seeds", "",
+                    f"Every shipped training seed of {reference} on the same crowds; the last row gives the mean "
+                    "success and, in brackets, its spread (max − min) over the seeds.", ""]
         for table in ("I", "II", "III"):
             settings = []
             for lb in labels:
@@ -266,5 +320,12 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                     cellsx.append(f"{succ} / {100 * r['collision_rate']:.1f} / {100 * r['timeout_rate']:.1f} · "
                                   f"{r['nav_time']:.1f} s")
                 out.append(f"| {lb} | " + " | ".join(cellsx) + " |")
+            if group == "seeds":
+                stats = []
+                for s_ in settings:
+                    vals = [100 * r["success_rate"] for lb in labels for r in board[lb]
+                            if r["table"] == table and r["row"] == s_]
+                    stats.append(f"{sum(vals) / len(vals):.1f} [{max(vals) - min(vals):.1f}]")
+                out.append(f"| mean [spread], {len(labels)} seeds | " + " | ".join(stats) + " |")
             out.append("")
     return "\n".join(out)

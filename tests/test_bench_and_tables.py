@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from crowdbench import bench, leaderboard
@@ -74,3 +76,51 @@ def test_leaderboard_entry_errors():
         leaderboard.parse_entry("x=no_such_policy")
     with pytest.raises(ValueError, match="LABEL=POLICY"):
         leaderboard.parse_entry("orca")
+
+
+def test_table_iii_pooled_rows_by_hand():
+    def cell(layout, regime, succ, time):
+        return {"policy": "p", "table": "III", "row": f"{layout} {regime}", "layout": layout, "humans": 30,
+                "responsiveness": 0.5, "seed": 0, "episodes": 100, "success_rate": succ, "collision_rate": 1 - succ,
+                "timeout_rate": 0.0, "nav_time": time, "path_length": time, "delta_v": 1.0}
+
+    rows = [cell("intersection", "Medium", 0.9, 10.0), cell("split_flow", "Medium", 0.6, 20.0),
+            cell("random_wander", "Medium", 0.3, 40.0)]
+    pooled = [r for r in leaderboard.with_pooled(rows) if r["row"].startswith("pooled")]
+    assert len(pooled) == 1 and pooled[0]["row"] == "pooled Medium" and pooled[0]["episodes"] == 300
+    assert pooled[0]["success_rate"] == pytest.approx(0.6)
+    assert pooled[0]["nav_time"] == pytest.approx((90 * 10 + 60 * 20 + 30 * 40) / 180)  # over successful episodes
+    md = leaderboard.leaderboard_markdown({"p": rows})
+    assert "pooled Medium" in md and "**60.0** / 40.0 / 0.0 · 18.3 s |" in md
+
+
+def test_calibration_table_marks_cells_within_tolerance():
+    from crowdbench import calibration
+
+    res = calibration.evaluate(calibration.STEPS[-1], "orca", episodes=3)
+    assert [r["row"] for r in res] == ["High", "Medium", "Low", "N=10", "N=20", "N=30"]
+    fake = [{**r, "success_rate": p / 100} for r, p in zip(res, (97, 80, 78, 93, 69, 43), strict=True)]
+    md = calibration.markdown(fake)
+    row = next(line for line in md.splitlines() if line.endswith("5/6 |"))
+    assert "**97.0**" in row and "| 80.0 |" in row  # 80 is 11 points from the paper's 91: not within ±5
+
+
+def test_seed_rows_report_mean_and_spread():
+    def rows(p):
+        return [{"policy": "x", "table": "I", "row": "High", "success_rate": p, "collision_rate": 1 - p,
+                 "timeout_rate": 0.0, "nav_time": 10.0}]
+
+    md = leaderboard.leaderboard_markdown({"h2int": rows(0.9), "h2int-seed1": rows(0.8), "h2int-seed2": rows(0.95)},
+                                          {"h2int": "main", "h2int-seed1": "seeds", "h2int-seed2": "seeds"})
+    assert "## h2int across training seeds" in md and "| mean [spread], 3 seeds | 88.3 [15.0] |" in md
+
+
+def test_trajectory_panels_are_drawn(tmp_path):
+    from crowdbench.panels import episode, plot
+    from crowdbench.policies import make_policy
+
+    ep = episode(make_policy("orca"), "intersection", 6, seed=1, responsiveness=0.5)
+    assert ep["pos"].shape[1] == 7 and ep["outcome"] in ("success", "collision", "timeout")
+    assert abs(np.linalg.norm(ep["goal"] - ep["pos"][0, 0])) >= 8.0  # a random crossing, ≥ 8 m long
+    out = plot("orca", str(tmp_path / "p.png"), humans=6, layouts=("circle_crossing", "split_flow"))
+    assert Path(out).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

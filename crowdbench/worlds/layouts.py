@@ -41,6 +41,8 @@ class Layout(ABC):
     half_size: float = 7.0
     separate_goals: ClassVar[bool] = True
     """Whether goals must be as far apart as starts (False for layouts whose goals lie on a shared exit line)."""
+    spacing: float = 0.8
+    """Mean clearance between two pedestrians' centres at placement (set by :func:`place_without_overlap`) [m]."""
     robot: str = "fixed"
     """``fixed``: the robot crosses from :attr:`robot_start` to :attr:`robot_goal` every episode; ``random``: start
     and goal drawn per episode uniformly in ``[-robot_area, robot_area]²``, at least ``robot_min_distance`` apart
@@ -110,11 +112,13 @@ class Layout(ABC):
         """
 
     def changed_goals(self, u: np.ndarray, positions: np.ndarray, goals: np.ndarray) -> np.ndarray:
-        """New goals ``(k, 2)`` of a random goal change (``u`` ``(k, renew_uniforms)``); default: :meth:`renew_goals`."""
+        """New goals ``(k, 2)`` of a random goal change (``u`` ``(k, renew_uniforms)``); default:
+        :meth:`renew_goals`."""
         return self.renew_goals(u, positions, goals)
 
     respawn: ClassVar[bool] = False
-    """Whether a pedestrian reaching its goal is re-spawned (:meth:`respawn_candidates`) rather than given a new goal."""
+    """Whether a pedestrian reaching its goal is re-spawned (:meth:`respawn_candidates`) instead of getting a new
+    goal."""
 
     def respawn_candidates(self, rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
         """``m`` candidate (start, goal) pairs for a re-spawned pedestrian (default: :meth:`candidates`)."""
@@ -151,15 +155,15 @@ def _inside_polygons(points: np.ndarray, obstacles: Sequence[Polygon]) -> np.nda
 
 
 @nb.njit(cache=True)
-def _clear(pts: np.ndarray, others: np.ndarray, dmin: float, ok: np.ndarray) -> None:
-    """``ok[c] &= |pts[c] − others[j]| ≥ dmin`` for every j (the same float operations as ``np.linalg.norm``)."""
+def _clear(pts: np.ndarray, others: np.ndarray, dmin: np.ndarray, ok: np.ndarray) -> None:
+    """``ok[c] &= |pts[c] − others[j]| ≥ dmin[j]`` for every j (the same float operations as ``np.linalg.norm``)."""
     for c in range(pts.shape[0]):
         if not ok[c]:
             continue
         for j in range(others.shape[0]):
             dx = pts[c, 0] - others[j, 0]
             dy = pts[c, 1] - others[j, 1]
-            if not np.sqrt(dx * dx + dy * dy) >= dmin:
+            if not np.sqrt(dx * dx + dy * dy) >= dmin[j]:
                 ok[c] = False
                 break
 
@@ -168,7 +172,7 @@ def place_without_overlap(
     layout: Layout,
     rng: np.random.Generator,
     n: int,
-    human_radius: float,
+    human_radius: float | np.ndarray,
     robot_radius: float,
     obstacles: Sequence[Polygon] = (),
     pool: int = 32,
@@ -177,19 +181,23 @@ def place_without_overlap(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Greedy bounded dart-throwing.
 
-    Pedestrian ``i`` takes the first of ``pool`` vectorised candidates whose start is clear of every accepted start,
-    the robot's start and goal, and the obstacles, and whose goal is clear of every accepted goal and the robot's
-    start and goal (clearance: radii + :data:`PLACEMENT_GAP`). After ``rounds`` pools without success it raises
-    ``ValueError`` — at most ``n * pool * rounds`` candidates are ever drawn.
+    Pedestrian ``i`` (radius ``human_radius[i]``, or one radius for all) takes the first of ``pool`` vectorised
+    candidates whose start is clear of every accepted start, the robot's start and goal, and the obstacles, and whose
+    goal is clear of every accepted goal and the robot's start and goal (clearance: both radii +
+    :data:`PLACEMENT_GAP`). After ``rounds`` pools without success it raises ``ValueError`` — at most
+    ``n * pool * rounds`` candidates are ever drawn. Sets ``layout.spacing`` (the mean clearance between two
+    pedestrians, for layouts that size their spawn areas by it).
     """
     starts = np.empty((n, 2))
     goals = np.empty((n, 2))
+    radii = np.broadcast_to(np.asarray(human_radius, dtype=np.float64), (n,))
     robot_pts = (np.array([layout.robot_start, layout.robot_goal], dtype=np.float64) if robot_points is None
                  else np.ascontiguousarray(robot_points, dtype=np.float64))
-    d_hh = 2 * human_radius + PLACEMENT_GAP
-    d_hr = human_radius + robot_radius + PLACEMENT_GAP
+    layout.spacing = 2 * float(radii.mean()) + PLACEMENT_GAP if n else 2 * 0.3 + PLACEMENT_GAP
     edges = obstacle_edges(obstacles)
     for i in range(n):
+        d_hr = np.full(2, radii[i] + robot_radius + PLACEMENT_GAP)
+        d_hh = radii[i] + radii[:i] + PLACEMENT_GAP
         for _ in range(rounds):
             s, g = layout.candidates(rng, i, n, pool)
             s, g = np.ascontiguousarray(s, dtype=np.float64), np.ascontiguousarray(g, dtype=np.float64)
@@ -201,14 +209,14 @@ def place_without_overlap(
             if len(edges):
                 for pts in (s, g):
                     clear = point_segment_distance(pts[:, None], edges[None, :, 0], edges[None, :, 1])
-                    ok &= (clear >= human_radius + PLACEMENT_GAP).all(axis=1) & ~_inside_polygons(pts, obstacles)
+                    ok &= (clear >= radii[i] + PLACEMENT_GAP).all(axis=1) & ~_inside_polygons(pts, obstacles)
             hits = np.flatnonzero(ok)
             if len(hits):
                 starts[i], goals[i] = s[hits[0]], g[hits[0]]
                 break
         else:
             raise ValueError(
-                f"layout {layout.name!r} cannot fit num_humans={n} pedestrians of radius {human_radius} m: "
+                f"layout {layout.name!r} cannot fit num_humans={n} pedestrians of radius up to {radii.max()} m: "
                 f"pedestrian {i} found no free start/goal in {pool * rounds} candidates; lower num_humans")
     return starts, goals
 
@@ -328,7 +336,8 @@ class _Streams(Layout):
 
     def _depth(self, n_stream: int) -> float:
         # random sequential placement fills ~half the area: give each pedestrian ~3.5 spacing² of band
-        return float(min(self.extent, max(2.0, 3.5 * n_stream * 0.8**2 / (2 * self.lane_half_width))))
+        spacing = getattr(self, "spacing", 0.8)
+        return float(min(self.extent, max(2.0, 3.5 * n_stream * spacing**2 / (2 * self.lane_half_width))))
 
     def _stream(self, index: int, n: int) -> tuple[np.ndarray, np.ndarray, int]:
         """(entry direction unit vector, lane axis unit vector, pedestrians in this stream)."""

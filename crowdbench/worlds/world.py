@@ -114,7 +114,8 @@ class CrowdWorld:
         self._park = np.stack([park_x, park_y], -1)  # (B, A, 2): distinct, far-away slots
 
         self.physics = PymunkWorlds(self.radius[0], self.obstacles, B)
-        self._change_every = round(self.layout.goal_change_interval / self.dt) if self.layout.goal_change_interval else 0
+        interval = self.layout.goal_change_interval
+        self._change_every = round(interval / self.dt) if interval else 0  # steps between random goal changes
         self.human_model.bind(B, H, self.obstacles, self.dt)
         self.reset(seeds=list(range(B)))
         self.physics.verify()
@@ -174,7 +175,8 @@ class CrowdWorld:
             n = cfg.num_humans if cfg.humans_range is None else int(rng.integers(cfg.humans_range[0],
                                                                                    cfg.humans_range[1] + 1))
             r_start, r_goal = lay.robot_endpoints(rng, self.edges, cfg.robot_radius)
-            starts, goals = lay.sample(rng, n, cfg.max_human_radius, cfg.robot_radius, self.obstacles,
+            self._draw_attributes(b, rng, slice(1, n + 1))
+            starts, goals = lay.sample(rng, n, self.radius[b, 1:n + 1], cfg.robot_radius, self.obstacles,
                                        robot_points=np.stack([r_start, r_goal]))
             self.pos[b] = self._park[b]
             self.goal[b] = self._park[b]
@@ -182,7 +184,6 @@ class CrowdWorld:
             self.pos[b, 1:n + 1], self.goal[b, 1:n + 1] = starts, goals
             self.active[b] = False
             self.active[b, :n + 1] = True
-            self._draw_attributes(b, rng, slice(1, n + 1))
         d = self.goal[idx] - self.pos[idx]
         self.heading[idx] = np.arctan2(d[..., 1], d[..., 0])
         self.vel[idx] = 0.0
@@ -200,7 +201,8 @@ class CrowdWorld:
             self.radius[b, slots] = rng.uniform(*cfg.human_radius_range, k)
             self.physics.set_radii(b, self.radius[b])
         if cfg.human_v_pref_range is not None:
-            self.v_pref[b, slots] = rng.uniform(*cfg.human_v_pref_range, len(self.v_pref[b, slots]))
+            v = rng.uniform(*cfg.human_v_pref_range, len(self.v_pref[b, slots]))
+            self.v_pref[b, slots] = v if cfg.human_speed_cap is None else np.minimum(v, cfg.human_speed_cap)
 
     def set_agents(self, world: int, positions: np.ndarray | None = None, velocities: np.ndarray | None = None,
                    goals: np.ndarray | None = None) -> None:

@@ -121,7 +121,9 @@ def test_full_state_observation():
     obs, _ = env.reset(seed=0)
     h = obs["robot"]["humans"]
     assert h.shape == (30, 5) and obs["robot"]["mask"].sum() == 4
-    np.testing.assert_allclose(h[:4, 4], 0.3)  # radius column
+    # the radius column holds the episode's drawn radii (rows sorted by distance)
+    np.testing.assert_allclose(np.sort(h[:4, 4]), np.sort(env.world.radius[0, 1:5]), atol=1e-6)
+    assert ((h[:4, 4] >= 0.3) & (h[:4, 4] <= 0.5)).all()
 
 
 def test_unknown_option_and_render_mode_errors():

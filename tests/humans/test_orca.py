@@ -145,8 +145,8 @@ def test_facade_api_shape():
 ])
 def test_world_orca_equals_facade(kwargs, max_neighbors, radius):
     """The world's batched ORCA pedestrians (robot invisible) follow exactly what PyRVOSimulator computes."""
-    w = CrowdWorld(WorldConfig(num_humans=12, robot_visible=False, time_limit=1e9), 1, "circle_crossing_legacy",
-                   "orca", kwargs)
+    w = CrowdWorld(WorldConfig(num_humans=12, robot_visible=False, time_limit=1e9, human_radius_range=None,
+                               human_v_pref_range=None), 1, "circle_crossing_legacy", "orca", kwargs)
     sim = PyRVOSimulator(0.25, 10, max_neighbors, 5, 5, radius, 1.0)
     for i in range(12):
         sim.addAgent(tuple(w.pos[0, i + 1]))

@@ -73,7 +73,7 @@ def test_impossible_crowd_raises_clear_error():
 
 @pytest.mark.parametrize(("layout", "bound"), [("circle_crossing_legacy", 7.5), ("circle_crossing", 11.0)])
 def test_goals_renew_so_density_holds(layout, bound):
-    w = CrowdWorld(WorldConfig(num_humans=20, time_limit=1e9), 2, layout, "orca")
+    w = CrowdWorld(WorldConfig(num_humans=20, time_limit=1e9, human_v_pref_range=None), 2, layout, "orca")
     first_goals = w.goal[:, 1:].copy()
     for _ in range(240):  # 60 s: every pedestrian reaches its first goal
         w.step(np.zeros((2, 2)))

@@ -14,6 +14,7 @@ from crowdbench.worlds import COLLISION, LAYOUTS, RUNNING, SUCCESS, TIMEOUT, Cro
 
 def scripted_world(num_humans=1, **cfg):
     """A world whose humans follow the (deterministic, non-reactive) linear model."""
+    cfg = {"human_radius_range": None, "human_v_pref_range": None, **cfg}  # radius 0.3 m, 1 m/s: hand-checked
     return CrowdWorld(WorldConfig(num_humans=num_humans, **cfg), 1, "circle_crossing_legacy", "linear")
 
 
@@ -254,7 +255,8 @@ def test_pedestrian_overlap_count_matches_brute_force():
 
 
 def test_randomised_pedestrian_attributes_are_drawn_per_episode_and_reach_pymunk():
-    cfg = WorldConfig(num_humans=12, human_radius_range=(0.3, 0.5), human_v_pref_range=(0.5, 1.5))
+    cfg = WorldConfig(num_humans=12, human_radius_range=(0.3, 0.5), human_v_pref_range=(0.5, 1.5),
+                      human_speed_cap=None)
     w = CrowdWorld(cfg, 3, "circle_crossing", "orca")
     w.reset(seeds=[5, 6, 7])
     r, v = w.radius[:, 1:].copy(), w.v_pref[:, 1:].copy()
