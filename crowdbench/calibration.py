@@ -10,20 +10,16 @@ generated from it (:func:`markdown`).
 from __future__ import annotations
 
 import json
-import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
-from crowdbench.evaluation import run_episodes, summarize
 from crowdbench.io import write_text
 
 PAPER = {"orca": {"I": (97, 91, 78), "II": (93, 69, 43)}, "social_force": {"I": (65, 46, 31), "II": (60, 27, 12)}}
 """The paper's success rates [%]: Table I (ρ = 0.7 / 0.5 / 0.3, N = 20), Table II (ρ = 0, N = 10 / 20 / 30)."""
 TOLERANCE = {"orca": 5, "social_force": 10}
 """How close (± percentage points) a calibrated cell should come to the paper."""
-CELLS = [("I", "High", 20, 0.7), ("I", "Medium", 20, 0.5), ("I", "Low", 20, 0.3),
-         ("II", "N=10", 10, 0.0), ("II", "N=20", 20, 0.0), ("II", "N=30", 30, 0.0)]
 
 
 @dataclass(frozen=True)
@@ -57,20 +53,15 @@ STEPS = (
 
 
 def evaluate(scenario: Scenario, policy: str, episodes: int, seed: int = 0) -> list[dict[str, Any]]:
-    """The six cells of one scenario for one classic robot policy."""
-    from crowdbench.policies import make_policy
-    from crowdbench.worlds import make_layout
+    """The six cells of one scenario (the leaderboard's Table I and II cells, on the scenario's layout) for one
+    classic robot policy."""
+    from crowdbench import leaderboard
 
-    out = []
-    for table, row, n, rho in CELLS:
-        t = time.time()
-        eps = run_episodes(make_policy(policy), episodes, seed=seed, num_worlds=100,
-                           layout=make_layout(scenario.layout, **scenario.layout_kwargs), num_humans=n,
-                           human_model="responsive_orca",
-                           human_model_kwargs={"responsiveness": rho, **scenario.model_kwargs}, **scenario.world)
-        out.append({"scenario": scenario.name, "policy": policy, "table": table, "row": row, "humans": n,
-                    "responsiveness": rho, **summarize(eps), "wall_s": round(time.time() - t, 1)})
-    return out
+    grid = [replace(c, layout=scenario.layout) for c in leaderboard.cells(("I", "II"))]
+    rows = leaderboard.evaluate_cells(policy, grid, episodes, seed, progress=False,
+                                      layout_kwargs=scenario.layout_kwargs, model_kwargs=scenario.model_kwargs,
+                                      world_options=scenario.world)
+    return [{"scenario": scenario.name, **r} for r in rows]
 
 
 def run(episodes: int = 500, seed: int = 0, workers: int = 2, steps: tuple[Scenario, ...] = STEPS

@@ -48,15 +48,23 @@ def cells(tables: tuple[str, ...] = ("I", "II", "III")) -> list[Cell]:
 
 
 def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed: int = 0, num_worlds: int = 100,
-                   policy_kwargs: dict | None = None, progress: bool = True,
-                   label: str | None = None) -> list[dict[str, Any]]:
-    """Run every cell for one policy; returns one summary dict per cell (``policy`` = ``label`` or the name)."""
+                   policy_kwargs: dict | None = None, progress: bool = True, label: str | None = None,
+                   layout_kwargs: dict | None = None, model_kwargs: dict | None = None,
+                   world_options: dict | None = None) -> list[dict[str, Any]]:
+    """Run every cell for one policy; returns one summary dict per cell (``policy`` = ``label`` or the name).
+    ``layout_kwargs``, ``model_kwargs`` (latent-responsive ORCA) and ``world_options`` (:class:`WorldConfig` fields)
+    change the scenario from its defaults (the calibration does)."""
+    from crowdbench.worlds import make_layout
+
     results = []
     for c in grid:
         t = time.time()
         policy = make_policy(policy_name, **(policy_kwargs or {}))
-        eps = run_episodes(policy, episodes, seed=seed, num_worlds=num_worlds, layout=c.layout, num_humans=c.humans,
-                           human_model="responsive_orca", human_model_kwargs={"responsiveness": c.rho})
+        eps = run_episodes(policy, episodes, seed=seed, num_worlds=num_worlds,
+                           layout=make_layout(c.layout, **(layout_kwargs or {})), num_humans=c.humans,
+                           human_model="responsive_orca",
+                           human_model_kwargs={"responsiveness": c.rho, **(model_kwargs or {})},
+                           **(world_options or {}))
         s = summarize(eps)
         results.append({"policy": label or policy_name, "table": c.table, "row": c.row, "layout": c.layout,
                         "humans": c.humans, "responsiveness": c.rho, "seed": seed, **s,

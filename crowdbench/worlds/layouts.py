@@ -116,7 +116,7 @@ class Layout(ABC):
         :meth:`renew_goals`."""
         return self.renew_goals(u, positions, goals)
 
-    respawn: ClassVar[bool] = False
+    respawn: bool = False
     """Whether a pedestrian reaching its goal is re-spawned (:meth:`respawn_candidates`) instead of getting a new
     goal."""
 
@@ -193,7 +193,8 @@ def place_without_overlap(
     radii = np.broadcast_to(np.asarray(human_radius, dtype=np.float64), (n,))
     robot_pts = (np.array([layout.robot_start, layout.robot_goal], dtype=np.float64) if robot_points is None
                  else np.ascontiguousarray(robot_points, dtype=np.float64))
-    layout.spacing = 2 * float(radii.mean()) + PLACEMENT_GAP if n else 2 * 0.3 + PLACEMENT_GAP
+    if n:
+        layout.spacing = 2 * float(radii.mean()) + PLACEMENT_GAP
     edges = obstacle_edges(obstacles)
     for i in range(n):
         d_hr = np.full(2, radii[i] + robot_radius + PLACEMENT_GAP)
@@ -336,8 +337,7 @@ class _Streams(Layout):
 
     def _depth(self, n_stream: int) -> float:
         # random sequential placement fills ~half the area: give each pedestrian ~3.5 spacing² of band
-        spacing = getattr(self, "spacing", 0.8)
-        return float(min(self.extent, max(2.0, 3.5 * n_stream * spacing**2 / (2 * self.lane_half_width))))
+        return float(min(self.extent, max(2.0, 3.5 * n_stream * self.spacing**2 / (2 * self.lane_half_width))))
 
     def _stream(self, index: int, n: int) -> tuple[np.ndarray, np.ndarray, int]:
         """(entry direction unit vector, lane axis unit vector, pedestrians in this stream)."""
