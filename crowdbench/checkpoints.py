@@ -21,17 +21,24 @@ FORMAT = "crowdbench.checkpoint/2"
 LEGACY_FORMATS = {"crowdbench.h2int/1": "h2int"}
 """Older formats that still load for evaluation, with the method they hold."""
 SHIPPED = Path(__file__).resolve().parent / "policies"
-"""Shipped checkpoints are package data: ``policies/<method>/checkpoints/<name>.pt``."""
+"""Shipped checkpoints are package data: ``policies/<method>/checkpoints/<name>.pt``, or the folder
+:data:`FOLDERS` names for methods that share a sub-package."""
+FOLDERS = {"cadrl": SHIPPED / "value" / "checkpoints" / "cadrl", "sarl": SHIPPED / "value" / "checkpoints" / "sarl"}
+
+
+def folder_of(method: str) -> Path:
+    """Where the shipped checkpoints of ``method`` live."""
+    return FOLDERS.get(method, SHIPPED / method / "checkpoints")
 
 
 def shipped(method: str, name: str) -> str:
     """Path of the shipped checkpoint ``name`` (e.g. ``"h2int"``, ``"meanpool"``) of ``method``."""
-    return os.fspath(SHIPPED / method / "checkpoints" / f"{name}.pt")
+    return os.fspath(folder_of(method) / f"{name}.pt")
 
 
 def shipped_names(method: str) -> list[str]:
     """The shipped checkpoints of ``method`` (names without ``.pt``)."""
-    folder = SHIPPED / method / "checkpoints"
+    folder = folder_of(method)
     return sorted(p.stem for p in folder.glob("*.pt")) if folder.is_dir() else []
 
 

@@ -73,7 +73,7 @@ def _policy(args: argparse.Namespace):
     return make_policy(name or "orca", **({"checkpoint": args.checkpoint} if args.checkpoint else {}))
 
 
-CHECKPOINT_POLICIES = ("h2int",)
+CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl")
 """Registered policies known to take ``checkpoint=`` (listed in errors; any policy with the argument accepts it)."""
 
 
@@ -96,11 +96,22 @@ def evaluate(args: argparse.Namespace) -> int:
 
 def train_cmd(args: argparse.Namespace) -> int:
     """Train a PPO method (H²INT or an ablation) with rsl-rl; checkpoints, curve and logs go to ``--out``."""
+    from crowdbench.training.value import VALUE_METHODS
+
+    if args.algo in VALUE_METHODS:
+        return train_value_cmd(args)
     from crowdbench.training.config import RESUMABLE, TrainConfig
     from crowdbench.training.methods import PPO_METHODS
     from crowdbench.training.trainer import resume_config, train
 
-    method = PPO_METHODS.get(args.algo)()  # unknown name: one error naming the valid ones
+    if args.algo not in PPO_METHODS.names():
+        raise ValueError(f"train: unknown method {args.algo!r}; valid choices: "
+                         f"{', '.join([*PPO_METHODS.names(), *VALUE_METHODS])}")
+    misplaced = [f"--{k.replace('_', '-')}" for k in VALUE_ONLY if getattr(args, k) is not None]
+    if misplaced:
+        raise ValueError(f"{', '.join(misplaced)}: options of the value-based methods ({', '.join(VALUE_METHODS)}), "
+                         f"not of {args.algo}")
+    method = PPO_METHODS.get(args.algo)()
     speed = {name: getattr(args, name) for name in RESUMABLE if getattr(args, name) is not None}
     if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
         path = os.path.join(args.resume, "last.pt") if os.path.isdir(args.resume) else args.resume
@@ -118,6 +129,36 @@ def train_cmd(args: argparse.Namespace) -> int:
     trainer = train(cfg, out, resume=args.resume)
     print(f"wrote {os.path.join(out, 'last.pt')} and {os.path.join(out, 'curve.png')} "
           f"({trainer.iteration} iterations, {trainer.env_steps:,} env steps, {trainer.elapsed / 60:.1f} min)")
+    return 0
+
+
+VALUE_ONLY = ("worlds", "il_episodes", "rl_episodes")
+
+
+def train_value_cmd(args: argparse.Namespace) -> int:
+    """CADRL / SARL: imitation of the ORCA robot, then TD learning (:mod:`crowdbench.training.value`)."""
+    from crowdbench.training.value import ValueTrainConfig, resume_config, train_value
+
+    ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "iterations", "until_success", "envs",
+                                                     "env_processes", "epochs", "mini_batches")
+                if getattr(args, k) is not None] + (["--no-anneal"] if args.no_anneal else [])
+    if ppo_only:
+        raise ValueError(f"{', '.join(ppo_only)}: options of the PPO methods, not of {args.algo}")
+    speed = {k: getattr(args, k) for k in ("minutes", "threads") if getattr(args, k) is not None}
+    if args.resume:
+        path = os.path.join(args.resume, "last.pt") if os.path.isdir(args.resume) else args.resume
+        cfg = resume_config(path, **speed)
+        if cfg.method != args.algo:
+            raise ValueError(f"--resume: {path!r} is a {cfg.method} run, not {args.algo}")
+        out = args.out or os.path.dirname(os.path.abspath(path))
+    else:
+        fields = {k: getattr(args, k) for k in VALUE_ONLY if getattr(args, k) is not None}
+        cfg = ValueTrainConfig(method=args.algo, seed=args.seed, **fields, **speed)
+        out = args.out or os.path.join("runs", f"{args.algo}-seed{cfg.seed}")
+    print(f"training {cfg.method} seed={cfg.seed} → {out}")
+    trainer = train_value(cfg, out, resume=args.resume)
+    print(f"wrote {os.path.join(out, 'policy.pt')}, last.pt and curve.png ({trainer.phase}: "
+          f"{trainer.episode} episodes, {trainer.elapsed / 60:.1f} min)")
     return 0
 
 
@@ -248,8 +289,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--checkpoint", default=None,
                    help="checkpoint of a checkpoint-backed policy: a path or a shipped name (h2int: meanpool, ...)")
     p.set_defaults(func=evaluate)
-    p = sub.add_parser("train", help="train a learned policy (H²INT) with rsl-rl PPO")
-    p.add_argument("algo", metavar="METHOD", help="registered PPO method: h2int")
+    p = sub.add_parser("train", help="train a learned policy: H²INT (rsl-rl PPO), CADRL or SARL (value learning)")
+    p.add_argument("algo", metavar="METHOD", help="h2int (or another registered PPO method), cadrl or sarl")
     p.add_argument("--variant", default=None, help="h2int architecture: h2int (default), flat, meanpool or standard")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
@@ -269,6 +310,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--mini-batches", type=int, default=None, help="PPO mini-batches per epoch (default 4)")
     p.add_argument("--no-anneal", action="store_true",
                    help="no curriculum: train at the final ρ (rho_min = 0) from the start")
+    p.add_argument("--worlds", type=int, default=None,
+                   help="cadrl/sarl: episodes run at once (default 10; same episode and update counts)")
+    p.add_argument("--il-episodes", type=int, default=None, help="cadrl/sarl: ORCA demonstrations (default 3000)")
+    p.add_argument("--rl-episodes", type=int, default=None, help="cadrl/sarl: TD-learning episodes (default 10000)")
     p.set_defaults(func=train_cmd)
     p = sub.add_parser("export", help="export a checkpoint to TorchScript and ONNX")
     p.add_argument("--checkpoint", default=None, help="H²INT checkpoint (path or shipped name; default: h2int)")

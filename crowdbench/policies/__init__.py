@@ -2,8 +2,8 @@
 
 Layout: :mod:`~crowdbench.policies.base` (contract + registry) and :mod:`~crowdbench.policies.classic` (``linear``,
 ``orca``, ``social_force``: numpy only) here; each learned method is a sub-package (``h2int/``: model, policy wrapper,
-export, private ``_kernels/``). Learned methods are registered by ``"module:Class"`` string and imported on first
-use, so ``import crowdbench.policies`` and the classic baselines never import torch.
+export, private ``_kernels/``; ``value/``: CADRL and SARL). Learned methods are registered by ``"module:Class"``
+string and imported on first use, so ``import crowdbench.policies`` and the classic baselines never import torch.
 """
 
 from __future__ import annotations
@@ -12,5 +12,7 @@ from crowdbench.policies.base import POLICIES, RobotPolicy, make_policy, registe
 from crowdbench.policies.classic import LinearPolicy, ORCAPolicy, SocialForcePolicy
 
 register("h2int", "crowdbench.policies.h2int.policy:H2INTPolicy")
+register("cadrl", "crowdbench.policies.value.policy:CADRLPolicy")
+register("sarl", "crowdbench.policies.value.policy:SARLPolicy")
 
 __all__ = ["POLICIES", "LinearPolicy", "ORCAPolicy", "RobotPolicy", "SocialForcePolicy", "make_policy", "register"]

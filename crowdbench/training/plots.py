@@ -139,3 +139,45 @@ def plot_runs(history_files: list[str], path: str) -> None:
     with atomic_path(path, suffix=".png") as tmp:
         fig.savefig(tmp, format="png")
     plt.close(fig)
+
+
+def plot_value_curve(history: dict[str, list], evals: list[dict], path: str, title: str = "") -> None:
+    """CADRL/SARL run: success of the demonstration and TD-learning episodes (moving average over 500) and the
+    quick greedy evaluations against episodes; ε on a second axis."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4), dpi=100)
+    ph = np.asarray(history["phase"])
+    ax2 = ax.twinx()
+    phases = (("il", "tab:gray", "ORCA demonstrations"), ("rl", "tab:blue", "TD learning (ε-greedy)"))
+    for phase, colour, label in phases:
+        sel = ph == phase
+        if not sel.any():
+            continue
+        ep = np.asarray(history["episode"])[sel]
+        succ = np.asarray(history["success"], dtype=float)[sel]
+        k = max(1, int(round(500 / max(np.median(np.diff(ep)) if len(ep) > 1 else 1, 1))))
+        smooth = np.convolve(np.nan_to_num(succ), np.ones(k) / k, mode="valid") if len(succ) >= k else succ
+        ax.plot(ep[len(ep) - len(smooth):], smooth, color=colour, label=f"{label}, success")
+        if phase == "rl":
+            ax2.plot(ep, np.asarray(history["epsilon"])[sel], "--", color="tab:orange", label="ε")
+    rl_evals = [e for e in evals if e["phase"] in ("rl", "done")]
+    if rl_evals:
+        ax.plot([e["episode"] for e in rl_evals], [e["success_rate"] for e in rl_evals], "o-", color="tab:green",
+                label="greedy eval (N=20, ρ=0.5; episode 0 = after imitation)")
+    ax.set_xlabel("episode (of each phase)")
+    ax.set_ylabel("success rate")
+    ax.set_ylim(0, 1.02)
+    ax.grid(alpha=0.3)
+    ax2.set_ylabel("exploration ε")
+    ax2.set_ylim(0, 1.02)
+    lines, lines2 = ax.get_legend_handles_labels(), ax2.get_legend_handles_labels()
+    ax.legend(lines[0] + lines2[0], lines[1] + lines2[1], loc="lower right", fontsize=8)
+    ax.set_title(title)
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
