@@ -185,7 +185,7 @@ def _act_ms(policy: Any, obs: dict[str, np.ndarray], repeats: int, calls: int = 
     return _repeat(timed, repeats)
 
 
-def decision_ms(policy_name: str, repeats: int, num_humans: int = 20) -> dict[str, float]:
+def decision_ms(policy_name: str, repeats: int, num_humans: int = 20, **policy_kwargs: Any) -> dict[str, float]:
     """One decision of a registered robot policy for one robot [ms]: circle crossing, ``num_humans`` latent-responsive
     pedestrians after 20 steps (a realistic crowd around the robot), the policy's own observation, one thread."""
     import torch
@@ -197,7 +197,7 @@ def decision_ms(policy_name: str, repeats: int, num_humans: int = 20) -> dict[st
 
     torch.set_num_threads(1)
     cfg = WorldConfig(num_humans=num_humans)
-    policy = make_policy(policy_name, cfg)
+    policy = make_policy(policy_name, cfg, **policy_kwargs)
     world = CrowdWorld(cfg, 1, "circle_crossing", "responsive_orca", {"responsiveness": 0.5})
     world.reset(seeds=[0])
     for _ in range(20):
@@ -217,6 +217,9 @@ def decision_ms_all(repeats: int) -> dict[str, Any]:
             out[name] = decision_ms(name, repeats)
         except Exception as e:  # noqa: BLE001 - reported, the other figures still run
             out[name] = {"skipped": f"{type(e).__name__}: {e}"}
+    for name in ("cadrl", "sarl"):  # look-ahead cost grows with the pedestrians sensed: also the worst case
+        if name in out and "skipped" not in out[name]:
+            out[f"{name}, all sensed"] = decision_ms(name, repeats, sensing_range=1e9)
     return out
 
 

@@ -84,10 +84,15 @@ def evaluate(args: argparse.Namespace) -> int:
     policy = _policy(args)
     eps = run_episodes(policy, args.episodes, seed=args.seed, num_worlds=args.worlds, layout=args.layout,
                        num_humans=args.humans, human_model=args.human_model,
-                       human_model_kwargs=_model_kwargs(args.human_model, args.responsiveness))
+                       human_model_kwargs=_model_kwargs(args.human_model, args.responsiveness),
+                       counterfactual=args.pedestrian_delay)
     summary = summarize(eps)
     for k, v in summary.items():
-        print(f"{k:>15}: {v:.4f}" if isinstance(v, float) else f"{k:>15}: {v}")
+        if k == "ci":
+            continue
+        lo, hi = summary["ci"].get(k, (None, None))
+        ci = f"   95 % CI [{lo:.4f}, {hi:.4f}]" if lo is not None and np.isfinite(lo) else ""
+        print(f"{k:>18}: {v:.4f}{ci}" if isinstance(v, float) else f"{k:>18}: {v}")
     if args.json:
         result = {"args": {k: v for k, v in vars(args).items() if k != "func"}, "summary": summary}
         write_text(args.json, json.dumps(result, indent=2) + "\n")
@@ -286,6 +291,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--episodes", type=int, default=100)
     p.add_argument("--worlds", type=int, default=16, help="worlds stepped together")
     p.add_argument("--json", default=None, help="write the summary to this JSON file")
+    p.add_argument("--pedestrian-delay", action="store_true",
+                   help="also run each episode without the robot (same seed) to measure the delay it imposes on "
+                        "pedestrians (doubles the crowd simulation)")
     p.add_argument("--checkpoint", default=None,
                    help="checkpoint of a checkpoint-backed policy: a path or a shipped name (h2int: meanpool, ...)")
     p.set_defaults(func=evaluate)

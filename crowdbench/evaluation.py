@@ -1,4 +1,5 @@
-"""Batched episode runner and the paper's six metrics, shared by ``crowdbench demo``/``evaluate`` and leaderboards.
+"""Batched episode runner, shared by ``crowdbench evaluate``, ``tables``, ``leaderboard`` and training's quick
+evaluations; the metrics it records are defined in :mod:`crowdbench.metrics`.
 
 Episode ``k`` of an evaluation with seed ``S`` always uses world seed ``S + k``, whatever the batch size, so results
 do not depend on how many worlds run at once (for policies without cross-world state).
@@ -6,83 +7,68 @@ do not depend on how many worlds run at once (for policies without cross-world s
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import copy
+import dataclasses
 from typing import Any
 
 import numpy as np
 
 from crowdbench.config import make_config
+from crowdbench.humans.base import make as make_model
+from crowdbench.metrics import Episode, EpisodeMeter, summarize
 from crowdbench.policies.base import RobotPolicy
 from crowdbench.robots.observations import make_observation
 from crowdbench.worlds.world import OUTCOMES, CrowdWorld
 
 
-@dataclass
-class Episode:
-    """One finished episode."""
-
-    seed: int
-    outcome: str
-    """``success``, ``collision`` or ``timeout``."""
-    time: float
-    """Episode duration [s]."""
-    path_length: float
-    """Robot path length [m]."""
-    max_delta_v: float
-    """Largest step-to-step change of the robot's velocity vector, ‖v_t − v_{t−1}‖, over the episode, starting from
-    rest (v_0 = 0) as in the paper, whose ORCA and SF rows read Δv = 1.00 = v_pref [m/s]."""
-
-
-def summarize(episodes: list[Episode]) -> dict[str, float]:
-    """The paper's columns: success / collision / timeout rates, navigation time and path length (means over
-    successful episodes; NaN if none) and Δv (mean over all episodes of ``max_delta_v``)."""
-    n = len(episodes)
-    if n == 0:
-        raise ValueError("summarize needs at least one episode")
-    ok = [e for e in episodes if e.outcome == "success"]
-    return {
-        "episodes": n,
-        "success_rate": len(ok) / n,
-        "collision_rate": sum(e.outcome == "collision" for e in episodes) / n,
-        "timeout_rate": sum(e.outcome == "timeout" for e in episodes) / n,
-        "nav_time": float(np.mean([e.time for e in ok])) if ok else float("nan"),
-        "path_length": float(np.mean([e.path_length for e in ok])) if ok else float("nan"),
-        "delta_v": float(np.mean([e.max_delta_v for e in episodes])),
-    }
-
-
 def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: int = 16,
                  layout: str = "circle_crossing", num_humans: int = 20, human_model: Any = "responsive_orca",
-                 human_model_kwargs: dict | None = None, **world_options: Any) -> list[Episode]:
-    """Run ``episodes`` episodes of ``policy`` in a batch of ``num_worlds`` worlds; returns them ordered by seed."""
+                 human_model_kwargs: dict | None = None, counterfactual: bool = False,
+                 **world_options: Any) -> list[Episode]:
+    """Run ``episodes`` episodes of ``policy`` in a batch of ``num_worlds`` worlds; returns them ordered by seed.
+
+    With ``counterfactual``, a twin batch of the same seeds runs alongside with the robot absent (invisible to the
+    pedestrians), for the pedestrians' delay (:mod:`crowdbench.metrics`); it costs a second crowd simulation.
+    """
     if episodes < 1:
         raise ValueError(f"episodes must be ≥ 1, got {episodes}")
     config = make_config(num_humans=num_humans, **world_options)
     B = min(num_worlds, episodes)
-    world = CrowdWorld(config, B, layout, human_model, human_model_kwargs)
+    model = make_model(human_model, **(human_model_kwargs or {})) if isinstance(human_model, str) else human_model
+    twin_model = copy.deepcopy(model) if counterfactual else None
+    world = CrowdWorld(config, B, layout, model)
+    twin = (CrowdWorld(dataclasses.replace(config, robot_visible=False), B, layout, twin_model)
+            if counterfactual else None)
     obs_builder = make_observation(policy.observation, config)
+    meter = EpisodeMeter(B, world.dt, config.reward.goal_tolerance)
     next_k = B
     ep_seed = np.arange(B) + seed
     world.reset(seeds=[int(s) for s in ep_seed])
+    if twin is not None:
+        twin.reset(seeds=[int(s) for s in ep_seed])
+    meter.start(np.arange(B), world)
     policy.reset()
     running = np.ones(B, dtype=bool)
     path = np.zeros(B)
     max_dv = np.zeros(B)
-    prev_v = np.zeros((B, 2))
+    still = np.zeros((B, 2))
     out: list[Episode] = []
     while running.any():
         action = policy.act(obs_builder.build(world))
-        start = world.pos[:, 0].copy()
+        prev_pos, prev_goal, prev_v = world.pos.copy(), world.goal.copy(), world.vel[:, 0].copy()
+        twin_prev = (twin.pos.copy(), twin.goal.copy()) if twin is not None else None
         res = world.step(action)
+        if twin is not None:
+            twin.step(still)
+        meter.update(world, res, prev_pos, prev_v, prev_goal, twin, twin_prev)
         v = world.vel[:, 0]
-        path += np.linalg.norm(world.pos[:, 0] - start, axis=-1)
-        dv = np.linalg.norm(v - prev_v, axis=-1)
-        max_dv = np.maximum(max_dv, dv)
-        prev_v = v.copy()
+        path += np.linalg.norm(world.pos[:, 0] - prev_pos[:, 0], axis=-1)
+        max_dv = np.maximum(max_dv, np.linalg.norm(v - prev_v, axis=-1))
         done = (res.terminated | res.truncated) & running
         for b in np.flatnonzero(done):
-            out.append(Episode(int(ep_seed[b]), OUTCOMES[int(res.outcome[b])], float(world.steps[b] * world.dt),
-                               float(path[b]), float(max_dv[b])))
+            outcome = OUTCOMES[int(res.outcome[b])]
+            out.append(Episode(int(ep_seed[b]), outcome, float(world.steps[b] * world.dt), float(path[b]),
+                               float(max_dv[b]), **meter.episode(b, outcome, float(path[b]))))
         if done.any():
             restart = done.copy()
             for b in np.flatnonzero(done):
@@ -92,10 +78,15 @@ def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: 
                 else:
                     running[b] = restart[b] = False
             if restart.any():
-                world.reset(seeds=[int(s) for s in ep_seed[restart]], mask=restart)
+                seeds = [int(s) for s in ep_seed[restart]]
+                world.reset(seeds=seeds, mask=restart)
+                if twin is not None:
+                    twin.reset(seeds=seeds, mask=restart)
+                meter.start(np.flatnonzero(restart), world)
             policy.reset(done)
             path[done] = 0.0
             max_dv[done] = 0.0
-            prev_v[done] = 0.0
     return sorted(out, key=lambda e: e.seed)
 
+
+__all__ = ["Episode", "run_episodes", "summarize"]

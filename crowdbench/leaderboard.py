@@ -12,12 +12,14 @@ Each cell uses evaluation seed S (episode k ↔ world seed S + k), so every poli
 from __future__ import annotations
 
 import json
+import math
 import time
 from dataclasses import dataclass
 from typing import Any
 
 from crowdbench.evaluation import run_episodes, summarize
 from crowdbench.io import write_text
+from crowdbench.metrics import wilson
 from crowdbench.policies import make_policy
 
 REGIMES = {"High": 0.7, "Medium": 0.5, "Low": 0.3}
@@ -50,10 +52,11 @@ def cells(tables: tuple[str, ...] = ("I", "II", "III")) -> list[Cell]:
 def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed: int = 0, num_worlds: int = 100,
                    policy_kwargs: dict | None = None, progress: bool = True, label: str | None = None,
                    layout_kwargs: dict | None = None, model_kwargs: dict | None = None,
-                   world_options: dict | None = None) -> list[dict[str, Any]]:
-    """Run every cell for one policy; returns one summary dict per cell (``policy`` = ``label`` or the name).
-    ``layout_kwargs``, ``model_kwargs`` (latent-responsive ORCA) and ``world_options`` (:class:`WorldConfig` fields)
-    change the scenario from its defaults (the calibration does)."""
+                   world_options: dict | None = None, counterfactual: bool = True) -> list[dict[str, Any]]:
+    """Run every cell for one policy; returns one summary dict per cell (``policy`` = ``label`` or the name; the
+    metrics of :func:`crowdbench.metrics.summarize`). ``layout_kwargs``, ``model_kwargs`` (latent-responsive ORCA) and
+    ``world_options`` (:class:`WorldConfig` fields) change the scenario from its defaults (the calibration does);
+    ``counterfactual`` runs the robot-absent twin for the pedestrians' delay."""
     from crowdbench.worlds import make_layout
 
     results = []
@@ -64,7 +67,7 @@ def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed
                            layout=make_layout(c.layout, **(layout_kwargs or {})), num_humans=c.humans,
                            human_model="responsive_orca",
                            human_model_kwargs={"responsiveness": c.rho, **(model_kwargs or {})},
-                           **(world_options or {}))
+                           counterfactual=counterfactual, **(world_options or {}))
         s = summarize(eps)
         results.append({"policy": label or policy_name, "table": c.table, "row": c.row, "layout": c.layout,
                         "humans": c.humans, "responsiveness": c.rho, "seed": seed, **s,
@@ -80,8 +83,6 @@ def with_pooled(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """``results`` plus Table III pooled over its layouts per response regime (the paper's presentation): rows
     ``pooled High`` etc. — rates averaged over the layouts (equal episodes each), navigation time and path length
     averaged over all successful episodes, Δv over all episodes."""
-    import math
-
     out = list(results)
     for regime in REGIMES:
         rows = [r for r in results if r["table"] == "III" and r["row"].endswith(f" {regime}")
@@ -94,23 +95,48 @@ def with_pooled(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
         def by_success(key: str, rows=rows, wins=wins, total=total) -> float:
             return sum(w * r[key] for w, r in zip(wins, rows, strict=True) if w) / total if total else math.nan
 
+        n = sum(r["episodes"] for r in rows)
+        rates = ("success_rate", "collision_rate", "timeout_rate")
+        ci = {k: list(wilson(round(sum(r[k] * r["episodes"] for r in rows)), n)) for k in rates}
         out.append({**{k: rows[0][k] for k in ("policy", "humans", "responsiveness", "seed")},
                     "table": "III", "row": f"pooled {regime}", "layout": "+".join(r["layout"] for r in rows),
-                    "episodes": sum(r["episodes"] for r in rows),
-                    **{k: sum(r[k] for r in rows) / len(rows) for k in ("success_rate", "collision_rate",
-                                                                          "timeout_rate", "delta_v")},
+                    "episodes": n,
+                    **{k: sum(r[k] for r in rows) / len(rows) for k in (*rates, "delta_v")},
                     "nav_time": by_success("nav_time"), "path_length": by_success("path_length"),
-                    "wall_s": sum(r.get("wall_s", 0.0) for r in rows)})
+                    **{k: sum(r[k] for r in rows) / len(rows) for k in SOCIAL if k in rows[0]},
+                    "ci": ci, "wall_s": sum(r.get("wall_s", 0.0) for r in rows)})
     return out
 
 
+SOCIAL = ("min_distance", "personal_space", "min_ttc", "jerk", "spl", "irregularity", "unaware_share", "ped_delay")
+"""Social metrics (:mod:`crowdbench.metrics`) shown in the per-method files."""
+
+
+def _ci(r: dict[str, Any], key: str, scale: float = 1.0, digits: int = 1) -> str:
+    lo, hi = r.get("ci", {}).get(key, (math.nan, math.nan))
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        return ""
+    return f" ({scale * lo:.{digits}f}–{scale * hi:.{digits}f})"
+
+
 def markdown(results: list[dict[str, Any]]) -> str:
-    lines = ["| table | setting | policy | r_s % | r_c % | r_t % | t_s [s] | l_p [m] | Δv [m/s] |",
-             "|---|---|---|---|---|---|---|---|---|"]
+    """One method's cells: the paper's six with 95 % intervals (Wilson for rates, bootstrap for means), then the
+    social metrics (:mod:`crowdbench.metrics`: min distance [m], personal-space compliance [%], min TTC [s], jerk
+    [m/s³], SPL, irregularity [rad], share of close encounters with unaware pedestrians [%], pedestrian delay [%])."""
+    lines = ["| table | setting | policy | r_s % | r_c % | r_t % | t_s [s] | l_p [m] | Δv [m/s] | d_min | PS % | "
+             "TTC | jerk | SPL | irr. | unaware % | delay % |", "|---|" * 1 + "---|" * 17]
+
+    def f(r: dict[str, Any], key: str, scale: float = 1.0, digits: int = 2) -> str:
+        v = r.get(key, math.nan)
+        return f"{scale * v:.{digits}f}" if v is not None and math.isfinite(v) else "—"
+
     for r in with_pooled(results):
-        lines.append(f"| {r['table']} | {r['row']} | {r['policy']} | {100 * r['success_rate']:.1f} | "
-                     f"{100 * r['collision_rate']:.1f} | {100 * r['timeout_rate']:.1f} | {r['nav_time']:.2f} | "
-                     f"{r['path_length']:.2f} | {r['delta_v']:.2f} |")
+        lines.append(f"| {r['table']} | {r['row']} | {r['policy']} | {100 * r['success_rate']:.1f}"
+                     f"{_ci(r, 'success_rate', 100)} | {100 * r['collision_rate']:.1f} | "
+                     f"{100 * r['timeout_rate']:.1f} | {f(r, 'nav_time')}{_ci(r, 'nav_time', 1, 2)} | "
+                     f"{f(r, 'path_length')} | {f(r, 'delta_v')} | {f(r, 'min_distance')} | "
+                     f"{f(r, 'personal_space', 100, 1)} | {f(r, 'min_ttc')} | {f(r, 'jerk', 1, 1)} | {f(r, 'spl')} | "
+                     f"{f(r, 'irregularity')} | {f(r, 'unaware_share', 100, 1)} | {f(r, 'ped_delay', 100, 1)} |")
     return "\n".join(lines) + "\n"
 
 
@@ -158,8 +184,8 @@ class Entry:
     policy: str
     kwargs: tuple[tuple[str, Any], ...] = ()
     group: str = "main"
-    """``main`` (the methods compared in Tables I–III), ``seeds`` (the reference method's other training seeds) or
-    ``ablation`` (H²INT variants)."""
+    """``main`` (the methods compared in Tables I–III), ``seeds:LABEL`` (other training seeds of the main entry
+    ``LABEL``; plain ``seeds`` = of H²INT) or ``ablation`` (H²INT variants)."""
 
     @property
     def slug(self) -> str:
@@ -276,6 +302,16 @@ TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
                        "layouts together, the paper's presentation)"}
 
 
+def _clear_best(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
+    """The row with the highest success rate if its Wilson interval lies above every other row's, else None."""
+    if not rows:
+        return None
+    top = max(rows, key=lambda r: r["success_rate"])
+    lo = top.get("ci", {}).get("success_rate", (math.nan,))[0]
+    others = [r.get("ci", {}).get("success_rate", (math.nan, math.nan))[1] for r in rows if r is not top]
+    return top if all(lo > hi for hi in others) else None
+
+
 def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[str, str] | None = None,
                          episodes: int | None = None, seed: int | None = None,
                          reference: str | None = "h2int") -> str:
@@ -286,21 +322,29 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
     out = ["# crowdbench leaderboard", ""]
     if episodes is not None:
         out += [f"{episodes} episodes per cell, evaluation seed {seed} (episode k ↔ world seed {seed} + k: every "
-                "method meets the same crowds). Cells: success r_s / collision r_c / timeout r_t [%], navigation "
-                "time t_s [s] of successful episodes. Regenerate with `crowdbench leaderboard`; per-method files "
-                "hold path length and Δv too.", ""]
+                "method meets the same crowds). Cells: success r_s (its Wilson 95 % interval) / collision r_c / "
+                "timeout r_t [%], navigation time t_s [s] of successful episodes. **Bold**: the best success of a "
+                "setting, only where its interval does not overlap any other method's. Regenerate with "
+                "`crowdbench leaderboard`; the per-method files hold the intervals of every column, path length, Δv "
+                "and the social metrics.", ""]
     board = {lb: with_pooled(rows) for lb, rows in board.items()}
-    for group in ("main", "seeds", "ablation"):
+    def family(g: str) -> str:
+        return g.split(":", 1)[1] if ":" in g else (reference or "")
+
+    seed_groups = sorted({g for g in groups.values() if g == "seeds" or g.startswith("seeds:")},
+                         key=lambda g: (family(g) != reference, family(g)))
+    for group in ("main", *seed_groups, "ablation"):
         labels = [lb for lb in board if groups.get(lb, "main") == group]
         if not labels:
             continue
-        if group != "main" and reference in board and reference not in labels:
-            labels.insert(0, reference)
+        head = family(group) if group.startswith("seeds") else reference
+        if group != "main" and head in board and head not in labels:
+            labels.insert(0, head)
         if group == "ablation":
             out += ["## Ablations", ""]
-        if group == "seeds":
-            out += [f"## {reference} across training seeds", "",
-                    f"Every shipped training seed of {reference} on the same crowds; the last row gives the mean "
+        if group.startswith("seeds"):
+            out += [f"## {head} across training seeds", "",
+                    f"Every shipped training seed of {head} on the same crowds; the last row gives the mean "
                     "success and, in brackets, its spread (max − min) over the seeds.", ""]
         for table in ("I", "II", "III"):
             settings = []
@@ -310,8 +354,8 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                         settings.append(r["row"])
             if not settings:
                 continue
-            best = {s: max(r["success_rate"] for lb in labels for r in board[lb]
-                           if r["table"] == table and r["row"] == s) for s in settings}
+            best = {s: _clear_best([r for lb in labels for r in board[lb] if r["table"] == table and r["row"] == s])
+                    for s in settings}
             out += [f"### {TABLE_TITLES[table]}", "", "| method | " + " | ".join(settings) + " |",
                     "|---|" + "---|" * len(settings)]
             for lb in labels:
@@ -323,12 +367,12 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                         cellsx.append("—")
                         continue
                     succ = f"{100 * r['success_rate']:.1f}"
-                    if r["success_rate"] == best[s]:
+                    if r is best[s]:
                         succ = f"**{succ}**"
-                    cellsx.append(f"{succ} / {100 * r['collision_rate']:.1f} / {100 * r['timeout_rate']:.1f} · "
-                                  f"{r['nav_time']:.1f} s")
+                    cellsx.append(f"{succ}{_ci(r, 'success_rate', 100, 0)} / {100 * r['collision_rate']:.1f} / "
+                                  f"{100 * r['timeout_rate']:.1f} · {r['nav_time']:.1f} s")
                 out.append(f"| {lb} | " + " | ".join(cellsx) + " |")
-            if group == "seeds":
+            if group.startswith("seeds"):
                 stats = []
                 for s_ in settings:
                     vals = [100 * r["success_rate"] for lb in labels for r in board[lb]

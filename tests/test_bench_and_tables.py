@@ -90,8 +90,24 @@ def test_table_iii_pooled_rows_by_hand():
     assert len(pooled) == 1 and pooled[0]["row"] == "pooled Medium" and pooled[0]["episodes"] == 300
     assert pooled[0]["success_rate"] == pytest.approx(0.6)
     assert pooled[0]["nav_time"] == pytest.approx((90 * 10 + 60 * 20 + 30 * 40) / 180)  # over successful episodes
+    from crowdbench.metrics import wilson
+
+    assert pooled[0]["ci"]["success_rate"] == list(wilson(180, 300))  # pooled counts: 90 + 60 + 30 of 300
     md = leaderboard.leaderboard_markdown({"p": rows})
-    assert "pooled Medium" in md and "**60.0** / 40.0 / 0.0 · 18.3 s |" in md
+    assert "pooled Medium" in md and "**60.0** (54–65) / 40.0 / 0.0 · 18.3 s |" in md
+
+
+def test_best_is_bold_only_where_intervals_do_not_overlap():
+    from crowdbench.metrics import wilson
+
+    def row(k, n=500):
+        return [{"policy": "x", "table": "I", "row": "High", "success_rate": k / n, "collision_rate": 1 - k / n,
+                 "timeout_rate": 0.0, "nav_time": 10.0, "ci": {"success_rate": list(wilson(k, n))}}]
+
+    clear = leaderboard.leaderboard_markdown({"a": row(490), "b": row(440)})
+    assert "**98.0**" in clear
+    close = leaderboard.leaderboard_markdown({"a": row(490), "b": row(485)})
+    assert "**" not in close.split("### ")[1]  # 98.0 vs 97.0: the intervals overlap, no winner
 
 
 def test_calibration_table_marks_cells_within_tolerance():

@@ -20,12 +20,14 @@ networks, the optimiser and the generator).
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
 import json
 import os
 import sys
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
 
@@ -97,6 +99,8 @@ class ReplayMemory:
 
 
 VALUE_METHODS = ("cadrl", "sarl")
+CLOCK = ("episodes", "targets", "sgd", "evaluation", "checkpoints")
+"""Where a run's wall-clock time goes (seconds per activity, kept in ``history.json``)."""
 PHASES = ("il", "il_fit", "rl", "done")
 RESUMABLE = ("minutes", "threads")
 """Fields a resumed run may change."""
@@ -252,10 +256,19 @@ class ValueTrainer:
         self.optimizer = self._sgd(cfg.il_learning_rate)
         self.phase, self.episode, self.epoch = "il", 0, 0
         self.elapsed = 0.0
+        self.clock = dict.fromkeys(CLOCK, 0.0)
         self.history: dict[str, list] = {k: [] for k in ("phase", "episode", "time", "success", "collision",
                                                          "timeout", "epsilon", "loss", "memory")}
         self.evals: list[dict[str, Any]] = []
         self.gamma_step = cfg.gamma ** (self.config.time_step * self.config.robot_v_pref)
+
+    @contextlib.contextmanager
+    def _timed(self, activity: str) -> Iterator[None]:
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.clock[activity] += time.perf_counter() - t0
 
     def _sgd(self, lr: float):
         import torch
@@ -369,8 +382,10 @@ class ValueTrainer:
             if self.phase == "il":
                 n = min(max(cfg.worlds, 1), cfg.il_episodes - self.episode)
                 if n > 0:
-                    eps = self.run_round(n, "il")
-                    self.store(eps, imitation=True)
+                    with self._timed("episodes"):
+                        eps = self.run_round(n, "il")
+                    with self._timed("targets"):
+                        self.store(eps, imitation=True)
                     self.episode += n
                     self._record(eps, 0.0, float("nan"))
                 if self.episode >= cfg.il_episodes:
@@ -378,7 +393,8 @@ class ValueTrainer:
                     self.save()
             elif self.phase == "il_fit":
                 if self.epoch < cfg.il_epochs and len(self.memory):
-                    loss = self.fit_epoch()
+                    with self._timed("sgd"):
+                        loss = self.fit_epoch()
                     self.epoch += 1
                     self._record([], 0.0, loss)
                     self.save(figure=False)
@@ -396,9 +412,12 @@ class ValueTrainer:
                     break
                 n = min(cfg.worlds, cfg.rl_episodes - self.episode)
                 eps_rate = cfg.epsilon(self.episode)
-                eps = self.run_round(n, "rl", eps_rate)
-                self.store(eps, imitation=False)
-                loss = self.fit_batches(n * cfg.batches_per_episode)
+                with self._timed("episodes"):
+                    eps = self.run_round(n, "rl", eps_rate)
+                with self._timed("targets"):
+                    self.store(eps, imitation=False)
+                with self._timed("sgd"):
+                    loss = self.fit_batches(n * cfg.batches_per_episode)
                 before, self.episode = self.episode, self.episode + n
                 if self.episode // cfg.target_update > before // cfg.target_update:
                     self.target.load_state_dict(self.net.state_dict())
@@ -433,9 +452,11 @@ class ValueTrainer:
             return
         from crowdbench.evaluation import run_episodes, summarize
 
-        s = summarize(run_episodes(self.policy, self.cfg.eval_episodes, seed=10**6,
-                                   num_worlds=min(self.cfg.eval_episodes, 100), num_humans=20,
-                                   human_model="responsive_orca", human_model_kwargs={"responsiveness": 0.5}))
+        with self._timed("evaluation"):
+            s = summarize(run_episodes(self.policy, self.cfg.eval_episodes, seed=10**6,
+                                       num_worlds=min(self.cfg.eval_episodes, 100), num_humans=20,
+                                       human_model="responsive_orca",
+                                       human_model_kwargs={"responsiveness": 0.5}))
         self.evals.append({"phase": self.phase, "episode": self.episode, "time": self.elapsed, **s})
 
     def _progress(self) -> None:
@@ -474,17 +495,20 @@ class ValueTrainer:
         from crowdbench.io import write_text
         from crowdbench.training.plots import plot_value_curve
 
-        full = {**self.policy_checkpoint(), "target": self.target.state_dict(),
-                "optimizer": self.optimizer.state_dict(), "memory": self.memory.state_dict(),
-                "rng": _encode_state(self.rng.bit_generator.state), "epoch": self.epoch,
-                "torch_rng": torch.get_rng_state(), "history": self.history, "evals": self.evals}
-        checkpoints.save(full, os.path.join(self.out, "last.pt"))
-        checkpoints.save(self.policy_checkpoint(), os.path.join(self.out, "policy.pt"))
-        write_text(os.path.join(self.out, "history.json"),
-                   json.dumps({"config": self.cfg.to_dict(), "history": self.history, "evals": self.evals}) + "\n")
-        if figure:
-            plot_value_curve(self.history, self.evals, os.path.join(self.out, "curve.png"),
-                             title=f"{self.cfg.method} (seed {self.cfg.seed})")
+        with self._timed("checkpoints"):
+            full = {**self.policy_checkpoint(), "target": self.target.state_dict(),
+                    "optimizer": self.optimizer.state_dict(), "memory": self.memory.state_dict(),
+                    "rng": _encode_state(self.rng.bit_generator.state), "epoch": self.epoch,
+                    "torch_rng": torch.get_rng_state(), "history": self.history, "evals": self.evals,
+                    "clock": self.clock}
+            checkpoints.save(full, os.path.join(self.out, "last.pt"))
+            checkpoints.save(self.policy_checkpoint(), os.path.join(self.out, "policy.pt"))
+            write_text(os.path.join(self.out, "history.json"),
+                       json.dumps({"config": self.cfg.to_dict(), "clock_s": self.clock, "history": self.history,
+                                   "evals": self.evals}) + "\n")
+            if figure:
+                plot_value_curve(self.history, self.evals, os.path.join(self.out, "curve.png"),
+                                 title=f"{self.cfg.method} (seed {self.cfg.seed})")
 
     def load(self, path: str) -> None:
         """Continue the run saved in ``path`` (same configuration apart from :data:`RESUMABLE` fields)."""
@@ -513,6 +537,7 @@ class ValueTrainer:
         torch.set_rng_state(ckpt["torch_rng"])
         self.elapsed = float(ckpt["elapsed_s"])
         self.history, self.evals = ckpt["history"], ckpt["evals"]
+        self.clock = {**self.clock, **ckpt.get("clock", {})}
 
 
 def _encode_state(state: dict[str, Any]) -> dict[str, Any]:
