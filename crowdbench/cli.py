@@ -258,22 +258,60 @@ def tables_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
-def leaderboard_cmd(args: argparse.Namespace) -> int:
-    """Every leaderboard entry on the paper's grid → ``OUT/<entry>.json|md`` and ``OUT/LEADERBOARD.md``."""
-    import torch
-
+def _methods(spec: str | None, add: list[str]) -> list:
+    """Leaderboard entries from ``--methods`` (shipped entry names, registered policy names or LABEL=POLICY[@CKPT],
+    comma-separated; default: every shipped entry) and ``--add``."""
     from crowdbench import leaderboard
 
-    torch.set_num_threads(1)
-    names = [n.strip() for n in args.entries.split(",")] if args.entries else list(leaderboard.ENTRIES)
-    unknown = [n for n in names if n not in leaderboard.ENTRIES]
-    if unknown:
-        raise ValueError(f"--entries: unknown {unknown}; valid choices: {', '.join(leaderboard.ENTRIES)}")
-    entries = [leaderboard.ENTRIES[n] for n in names] + [leaderboard.parse_entry(a) for a in args.add]
-    leaderboard.run_leaderboard(entries, args.out, args.episodes, args.seed,
-                                tuple(t.strip() for t in args.tables.split(",")), force=args.force)
-    with open(os.path.join(args.out, "LEADERBOARD.md")) as f:
+    if not spec:
+        chosen = list(leaderboard.ENTRIES.values())
+    else:
+        chosen = []
+        for item in (s.strip() for s in spec.split(",") if s.strip()):
+            if item in leaderboard.ENTRIES:
+                chosen.append(leaderboard.ENTRIES[item])
+            elif "=" in item:
+                chosen.append(leaderboard.parse_entry(item))
+            elif item in POLICIES.names():
+                chosen.append(leaderboard.Entry(item, item))
+            else:
+                raise ValueError(f"--methods: unknown {item!r}; valid choices: {', '.join(leaderboard.ENTRIES)}, "
+                                 f"a registered policy ({', '.join(POLICIES.names())}) or LABEL=POLICY[@CHECKPOINT]")
+    return chosen + [leaderboard.parse_entry(a) for a in add]
+
+
+def leaderboard_run_cmd(args: argparse.Namespace) -> int:
+    """A suite for every chosen method → ``OUT/<method>.json|md``, ``OUT/cells/`` and ``OUT/LEADERBOARD.md``."""
+    from crowdbench import harness
+
+    suite = harness.load_suite(args.suite, episodes=args.episodes)
+    entries = _methods(args.methods, args.add)
+    out = args.out or ("leaderboards" if args.suite == "paper" and args.episodes is None
+                       else os.path.join("runs", f"leaderboard-{suite.name}"))
+    harness.run(suite, entries, out, workers=args.workers, backend=args.backend, ray_address=args.ray_address,
+                force=args.force, progress=harness.print_progress)
+    with open(os.path.join(out, "LEADERBOARD.md")) as f:
         print(f.read())
+    return 0
+
+
+def leaderboard_list_cmd(args: argparse.Namespace) -> int:
+    """The shipped leaderboard entries, every registered policy with its shipped checkpoints, and the suites."""
+    from crowdbench import checkpoints, harness, leaderboard
+
+    print("leaderboard entries (crowdbench leaderboard run --methods NAME,...):")
+    for slug, e in leaderboard.ENTRIES.items():
+        ckpt = e.policy_kwargs().get("checkpoint")
+        where = f"  checkpoint {os.path.relpath(checkpoints.resolve(e.policy, ckpt))}" if ckpt else ""
+        print(f"  {slug:<22} policy {e.policy:<14} group {e.group:<14}{where}")
+    print("registered robot policies (built-in and entry-point plug-ins; any can run with --methods NAME):")
+    for name in POLICIES.names():
+        names = checkpoints.shipped_names(name)
+        print(f"  {name:<22} shipped checkpoints: {', '.join(names) if names else '—'}")
+    print("suites (--suite NAME or a path to a .toml file):")
+    for name in harness.suite_names():
+        s = harness.load_suite(name)
+        print(f"  {name:<10} {len(s.grid()):>2} cells × {s.episodes} episodes, seed {s.seed} — {s.description}")
     return 0
 
 
@@ -336,16 +374,25 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", default=None)
     p.add_argument("--md", default=None)
     p.set_defaults(func=tables_cmd)
-    p = sub.add_parser("leaderboard", help="the paper's tables for every method (cached per method)")
-    p.add_argument("--entries", default=None, help="comma-separated subset of the shipped entries (default: all)")
-    p.add_argument("--add", action="append", default=[], metavar="LABEL=POLICY[@CHECKPOINT]",
-                   help="an extra row: any registered robot policy (repeatable)")
-    p.add_argument("--episodes", type=int, default=500)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--tables", default="I,II,III", help="comma-separated subset of I, II, III")
-    p.add_argument("--out", default="leaderboards", help="folder for the results")
-    p.add_argument("--force", action="store_true", help="re-evaluate even when cached results match")
-    p.set_defaults(func=leaderboard_cmd)
+    p = sub.add_parser("leaderboard", help="score methods on a suite (run) or list methods and suites (list)")
+    lsub = p.add_subparsers(dest="action", required=True)
+    q = lsub.add_parser("run", help="evaluate methods on a suite; finished cells are stored as they finish")
+    q.add_argument("--suite", default="paper", help="paper (Tables I–III, 500 episodes), quick, or a .toml path")
+    q.add_argument("--methods", default=None,
+                   help="comma-separated: shipped entries, registered policies or LABEL=POLICY[@CHECKPOINT] "
+                        "(default: every shipped entry)")
+    q.add_argument("--add", action="append", default=[], metavar="LABEL=POLICY[@CHECKPOINT]",
+                   help="an extra row (repeatable)")
+    q.add_argument("--episodes", type=int, default=None, help="override the suite's episodes per cell")
+    q.add_argument("--workers", type=int, default=1, help="cells evaluated in parallel (processes or Ray tasks)")
+    q.add_argument("--backend", default="local", help="local (this machine) or ray (crowdbench[ray])")
+    q.add_argument("--ray-address", default=None, help="an existing Ray cluster (default: a local Ray instance)")
+    q.add_argument("--out", default=None,
+                   help="results folder (default: leaderboards for the paper suite, else runs/leaderboard-SUITE)")
+    q.add_argument("--force", action="store_true", help="re-evaluate stored cells too")
+    q.set_defaults(func=leaderboard_run_cmd)
+    q = lsub.add_parser("list", help="shipped entries, registered policies with checkpoints, suites")
+    q.set_defaults(func=leaderboard_list_cmd)
     p = sub.add_parser("plot", help="success trends of `tables` result files (ablation figure)")
     p.add_argument("results", nargs="+", help="JSON files written by `crowdbench tables --json`")
     p.add_argument("--out", default="trends.png")

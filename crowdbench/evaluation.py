@@ -16,7 +16,7 @@ import numpy as np
 from crowdbench.config import make_config
 from crowdbench.humans.base import make as make_model
 from crowdbench.metrics import Episode, EpisodeMeter, summarize
-from crowdbench.policies.base import RobotPolicy
+from crowdbench.policies.base import RobotPolicy, check_actions
 from crowdbench.robots.observations import make_observation
 from crowdbench.worlds.world import OUTCOMES, CrowdWorld
 
@@ -54,7 +54,7 @@ def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: 
     still = np.zeros((B, 2))
     out: list[Episode] = []
     while running.any():
-        action = policy.act(obs_builder.build(world))
+        action = check_actions(policy, policy.act(obs_builder.build(world)), B)
         prev_pos, prev_goal, prev_v = world.pos.copy(), world.goal.copy(), world.vel[:, 0].copy()
         twin_prev = (twin.pos.copy(), twin.goal.copy()) if twin is not None else None
         res = world.step(action)

@@ -87,7 +87,7 @@ def with_pooled(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
     for regime in REGIMES:
         rows = [r for r in results if r["table"] == "III" and r["row"].endswith(f" {regime}")
                 and not r["row"].startswith("pooled")]
-        if len(rows) < 2:
+        if len(rows) < 2 or any("error" in r for r in rows):
             continue
         wins = [r["success_rate"] * r["episodes"] for r in rows]
         total = sum(wins)
@@ -131,6 +131,9 @@ def markdown(results: list[dict[str, Any]]) -> str:
         return f"{scale * v:.{digits}f}" if v is not None and math.isfinite(v) else "—"
 
     for r in with_pooled(results):
+        if "error" in r:
+            lines.append(f"| {r['table']} | {r['row']} | {r['policy']} | error: {r['error']} |" + " |" * 16)
+            continue
         lines.append(f"| {r['table']} | {r['row']} | {r['policy']} | {100 * r['success_rate']:.1f}"
                      f"{_ci(r, 'success_rate', 100)} | {100 * r['collision_rate']:.1f} | "
                      f"{100 * r['timeout_rate']:.1f} | {f(r, 'nav_time')}{_ci(r, 'nav_time', 1, 2)} | "
@@ -196,15 +199,43 @@ class Entry:
         return dict(self.kwargs)
 
 
-ENTRIES: dict[str, Entry] = {e.slug: e for e in (
+METHODS: tuple[Entry, ...] = (
     Entry("orca", "orca"),
     Entry("social_force", "social_force"),
     Entry("h2int", "h2int", (("checkpoint", "h2int"),)),
+    Entry("cadrl", "cadrl", (("checkpoint", "cadrl"),)),
+    Entry("sarl", "sarl", (("checkpoint", "sarl"),)),
     Entry("h2int-flat", "h2int", (("checkpoint", "flat"),), "ablation"),
     Entry("h2int-meanpool", "h2int", (("checkpoint", "meanpool"),), "ablation"),
     Entry("h2int-standard", "h2int", (("checkpoint", "standard"),), "ablation"),
-)}
-"""The shipped leaderboard's rows (the learned baselines CADRL, SARL, DS-RNN and AIG-GST join as they land)."""
+)
+"""The leaderboard's methods (DS-RNN and AIG-GST join as they land)."""
+
+
+def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
+    """``methods`` whose checkpoint is shipped (a learned method appears once its checkpoint lands), each main
+    entry followed by its other shipped training seeds (checkpoints ``<name>-seed<k>``, group ``seeds:<label>``)."""
+    import re
+
+    from crowdbench.checkpoints import shipped_names
+
+    out: dict[str, Entry] = {}
+    for e in methods:
+        ckpt = e.policy_kwargs().get("checkpoint")
+        names = shipped_names(e.policy) if ckpt else []
+        if ckpt and ckpt not in names:
+            continue
+        out[e.slug] = e
+        if e.group == "main" and ckpt:
+            seeds = sorted((int(m[1]), n) for n in names if (m := re.fullmatch(rf"{re.escape(ckpt)}-seed(\d+)", n)))
+            for k, name in seeds:
+                seed_entry = Entry(f"{e.label}-seed{k}", e.policy, (("checkpoint", name),), f"seeds:{e.label}")
+                out[seed_entry.slug] = seed_entry
+    return out
+
+
+ENTRIES: dict[str, Entry] = shipped_entries()
+"""The shipped leaderboard's rows."""
 
 
 def parse_entry(spec: str) -> Entry:
@@ -259,43 +290,6 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
             "scenario": scenario_digest()}
 
 
-def run_leaderboard(entries: list[Entry], out_dir: str, episodes: int = 500, seed: int = 0,
-                    tables: tuple[str, ...] = ("I", "II", "III"), force: bool = False,
-                    progress: bool = True) -> dict[str, list[dict[str, Any]]]:
-    """Evaluate every entry on the grid (reusing ``out_dir/<slug>.json`` when its fingerprint and cells match, unless
-    ``force``), write each entry's JSON/markdown and ``out_dir/LEADERBOARD.md``; returns results by label."""
-    import os
-
-    grid = cells(tables)
-    wanted = {(c.table, c.row) for c in grid}
-    board: dict[str, list[dict[str, Any]]] = {}
-    for entry in entries:
-        path = os.path.join(out_dir, f"{entry.slug}.json")
-        fp = _fingerprint(entry, episodes, seed)
-        cached = None
-        if not force and os.path.exists(path):
-            with open(path) as f:
-                saved = json.load(f)
-            have = {(r["table"], r["row"]) for r in saved.get("results", [])}
-            if saved.get("meta", {}).get("fingerprint") == fp and wanted <= have:
-                cached = [r for r in saved["results"] if (r["table"], r["row"]) in wanted]
-        if cached is not None:
-            if progress:
-                print(f"{entry.label}: up to date ({path})", flush=True)
-            board[entry.label] = cached
-            continue
-        if progress:
-            print(f"{entry.label}: evaluating {len(grid)} cells × {episodes} episodes", flush=True)
-        res = evaluate_cells(entry.policy, grid, episodes, seed, policy_kwargs=entry.policy_kwargs(),
-                             progress=progress, label=entry.label)
-        save(res, path, os.path.join(out_dir, f"{entry.slug}.md"),
-             {"fingerprint": fp, "label": entry.label, "group": entry.group, "episodes": episodes, "seed": seed})
-        board[entry.label] = res
-    groups = {e.label: e.group for e in entries}
-    write_text(os.path.join(out_dir, "LEADERBOARD.md"), leaderboard_markdown(board, groups, episodes, seed))
-    return board
-
-
 TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
                 "II": "Table II — crowd size (circle crossing, non-responsive ρ = 0)",
                 "III": "Table III — unseen layouts (N = 30; trained on circle crossing only; pooled = the three "
@@ -304,6 +298,7 @@ TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
 
 def _clear_best(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
     """The row with the highest success rate if its Wilson interval lies above every other row's, else None."""
+    rows = [r for r in rows if "error" not in r]
     if not rows:
         return None
     top = max(rows, key=lambda r: r["success_rate"])
@@ -314,20 +309,22 @@ def _clear_best(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
 
 def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[str, str] | None = None,
                          episodes: int | None = None, seed: int | None = None,
-                         reference: str | None = "h2int") -> str:
+                         reference: str | None = "h2int", suite: str | None = None) -> str:
     """The paper's tables with one row per method: success / collision / timeout [%], navigation time [s] per
     setting; the best success of each setting in bold. Ablation entries get their own tables, headed by the
     ``reference`` method's row when it is on the board."""
     groups = groups or {}
     out = ["# crowdbench leaderboard", ""]
     if episodes is not None:
-        out += [f"{episodes} episodes per cell, evaluation seed {seed} (episode k ↔ world seed {seed} + k: every "
+        via = f"Suite `{suite}`: " if suite else ""
+        out += [f"{via}{episodes} episodes per cell, evaluation seed {seed} (episode k ↔ world seed {seed} + k: every "
                 "method meets the same crowds). Cells: success r_s (its Wilson 95 % interval) / collision r_c / "
                 "timeout r_t [%], navigation time t_s [s] of successful episodes. **Bold**: the best success of a "
                 "setting, only where its interval does not overlap any other method's. Regenerate with "
-                "`crowdbench leaderboard`; the per-method files hold the intervals of every column, path length, Δv "
-                "and the social metrics.", ""]
+                "`crowdbench leaderboard run`; the per-method files hold the intervals of every column, path length, "
+                "Δv and the social metrics.", ""]
     board = {lb: with_pooled(rows) for lb, rows in board.items()}
+
     def family(g: str) -> str:
         return g.split(":", 1)[1] if ":" in g else (reference or "")
 
@@ -366,6 +363,9 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                     if r is None:
                         cellsx.append("—")
                         continue
+                    if "error" in r:
+                        cellsx.append("error")
+                        continue
                     succ = f"{100 * r['success_rate']:.1f}"
                     if r is best[s]:
                         succ = f"**{succ}**"
@@ -376,8 +376,8 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                 stats = []
                 for s_ in settings:
                     vals = [100 * r["success_rate"] for lb in labels for r in board[lb]
-                            if r["table"] == table and r["row"] == s_]
-                    stats.append(f"{sum(vals) / len(vals):.1f} [{max(vals) - min(vals):.1f}]")
+                            if r["table"] == table and r["row"] == s_ and "error" not in r]
+                    stats.append(f"{sum(vals) / len(vals):.1f} [{max(vals) - min(vals):.1f}]" if vals else "—")
                 out.append(f"| mean [spread], {len(labels)} seeds | " + " | ".join(stats) + " |")
             out.append("")
     return "\n".join(out)

@@ -95,6 +95,10 @@ class HumanModel(ABC):
         return {}
 
 
+class PedestrianModelError(RuntimeError):
+    """A pedestrian model raised or returned unusable velocities; names the model."""
+
+
 HUMAN_MODELS: Registry[HumanModel] = Registry("pedestrian model", "crowdbench.humans")
 register = HUMAN_MODELS.register
 

@@ -46,6 +46,25 @@ class RobotPolicy(ABC):
         """Actions ``(B, 2)`` for observations ``obs`` (dict of ``(B, ...)`` arrays)."""
 
 
+class PolicyError(RuntimeError):
+    """A robot policy returned something unusable (wrong shape, NaN or inf); names the policy."""
+
+
+def check_actions(policy: RobotPolicy, action: np.ndarray, num_worlds: int) -> np.ndarray:
+    """``action`` as a float64 ``(num_worlds, 2)`` array, or :class:`PolicyError` naming the policy and the fault."""
+    name = type(policy).__name__
+    try:
+        a = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise PolicyError(f"robot policy {name} returned actions that are not numbers ({e})") from None
+    if a.shape != (num_worlds, 2):
+        raise PolicyError(f"robot policy {name} returned actions of shape {a.shape}; expected ({num_worlds}, 2)")
+    bad = ~np.isfinite(a).all(axis=1)
+    if bad.any():
+        raise PolicyError(f"robot policy {name} returned NaN or inf actions (worlds {np.flatnonzero(bad).tolist()})")
+    return a
+
+
 POLICIES: Registry[RobotPolicy] = Registry("robot policy", "crowdbench.policies")
 register = POLICIES.register
 

@@ -26,7 +26,7 @@ import pymunk
 
 from crowdbench.config import WorldConfig
 from crowdbench.geometry import norm, obstacle_edges, pair_overlaps, swept_pair_min_distance, swept_segment_fraction
-from crowdbench.humans.base import CrowdState, HumanModel, make
+from crowdbench.humans.base import CrowdState, HumanModel, PedestrianModelError, make
 from crowdbench.worlds.layouts import Layout, make_layout
 from crowdbench.worlds.physics import PymunkWorlds
 
@@ -258,7 +258,7 @@ class CrowdWorld:
         vel[:, 0] = self.robot_velocity(robot_action)
         if self.num_humans:
             state = self.crowd_state()
-            hv = self.human_model.step(state, self.model_rngs)
+            hv = self._human_velocities(state)
             if human_override is not None and human_override.any():
                 hv = np.where(human_override[..., None], human_actions, hv)
             vel[:, 1:] = _clip_norm(hv, self.v_pref[:, 1:])
@@ -315,6 +315,21 @@ class CrowdWorld:
             if self._change_every:
                 self._change_goals()
         return StepResult(reward, terms, terminated, truncated, outcome, d_min, overlaps, robot_hit)
+
+    def _human_velocities(self, state: CrowdState) -> np.ndarray:
+        """The pedestrian model's velocities ``(B, H, 2)``; a model that raises or returns the wrong shape, NaN or
+        inf is reported by name (:class:`~crowdbench.humans.base.PedestrianModelError`), not as a physics error."""
+        name = type(self.human_model).__name__
+        try:
+            hv = np.asarray(self.human_model.step(state, self.model_rngs), dtype=np.float64)
+        except Exception as e:
+            raise PedestrianModelError(f"pedestrian model {name} failed: {type(e).__name__}: {e}") from e
+        if hv.shape != (self.num_worlds, self.num_humans, 2):
+            raise PedestrianModelError(f"pedestrian model {name} returned velocities of shape {hv.shape}; expected "
+                                       f"({self.num_worlds}, {self.num_humans}, 2)")
+        if not np.isfinite(hv[self.active[:, 1:]]).all():
+            raise PedestrianModelError(f"pedestrian model {name} returned NaN or inf velocities")
+        return hv
 
     def _renew_goals(self) -> None:
         """Pedestrians within one radius of their goal get a new one by the layout's rule (vectorised over worlds;

@@ -1,0 +1,170 @@
+"""Leaderboard harness: suites, stored cells reused, faults isolated per cell, kill-and-resume, workers and backends
+give identical results."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from crowdbench import harness, leaderboard
+from crowdbench.humans import HUMAN_MODELS
+from crowdbench.policies import POLICIES, RobotPolicy
+
+
+def suite(**kw) -> harness.Suite:
+    base = dict(name="t", episodes=4, tables=("II",), worlds=4, counterfactual=False)
+    base.update(kw)
+    return harness.Suite(**base)
+
+
+def stable(path) -> dict:
+    """A method file without its timing and provenance fields."""
+    d = json.loads(path.read_text())
+    d["meta"].pop("provenance"), d["meta"].pop("wall_s")
+    for r in d["results"]:
+        r.pop("wall_s", None)
+    return d
+
+
+class Still(RobotPolicy):
+    def act(self, obs):
+        return np.zeros((len(obs["robot"]), 2))
+
+
+class Flaky(RobotPolicy):
+    """Fails only in the 30-pedestrian cell; NaN in the 20-pedestrian one."""
+
+    observation = "full_state"  # every pedestrian, so the mask counts the crowd
+
+    def act(self, obs):
+        n = int(obs["mask"].sum(axis=1).max())
+        if n > 20:
+            raise RuntimeError("no room for thirty")
+        return np.full((len(obs["robot"]), 2), np.nan if n > 10 else 0.0)
+
+
+@pytest.fixture
+def users_policies():
+    POLICIES.register("still_for_test", Still)
+    POLICIES.register("flaky_for_test", Flaky)
+    yield
+    POLICIES._factories.pop("still_for_test", None)
+    POLICIES._factories.pop("flaky_for_test", None)
+
+
+def test_shipped_suites_load_and_bad_suites_are_one_clear_error(tmp_path):
+    paper = harness.load_suite("paper")
+    assert paper.episodes == 500 and len(paper.grid()) == 15 and paper.counterfactual
+    assert harness.load_suite("quick", episodes=7).episodes == 7
+    bad = tmp_path / "bad.toml"
+    bad.write_text('episodes = 5\ntabels = ["I"]\n')
+    with pytest.raises(ValueError, match=r"unknown keys \['tabels'\]; valid choices"):
+        harness.load_suite(str(bad))
+    with pytest.raises(ValueError, match="valid choices: paper, quick"):
+        harness.load_suite("nope")
+    with pytest.raises(ValueError, match="tables"):
+        suite(tables=("IV",))
+    with pytest.raises(ValueError, match="rows"):
+        suite(rows=("II/N=11",))
+    assert [c.row for c in suite(rows=("II/N=20",)).grid()] == ["N=20"]
+
+
+def test_cells_are_stored_reused_and_faults_stay_in_their_cell(tmp_path, users_policies, monkeypatch):
+    entries = [leaderboard.ENTRIES["orca"], leaderboard.parse_entry("Standing still=still_for_test"),
+               leaderboard.parse_entry("flaky=flaky_for_test")]
+    board = harness.run(suite(), entries, str(tmp_path))
+    assert [r["success_rate"] for r in board["Standing still"]] == [0.0] * 3  # never reaches the goal
+    flaky = {r["row"]: r for r in board["flaky"]}
+    assert flaky["N=10"]["success_rate"] == 0.0  # the healthy cell completed
+    assert "NaN or inf" in flaky["N=20"]["error"] and "Flaky" in flaky["N=20"]["error"]
+    assert flaky["N=30"]["error"] == "RuntimeError: no room for thirty"
+    md = (tmp_path / "LEADERBOARD.md").read_text()
+    assert "| flaky |" in md and "error" in md and "| Standing still |" in md
+    assert len(list((tmp_path / "cells").rglob("*.json"))) == 9
+    meta = json.loads((tmp_path / "orca.json").read_text())["meta"]
+    assert meta["provenance"]["packages"]["numpy"] and meta["suite_digest"] == suite().digest()
+
+    calls = []
+    real = harness.run_cell
+    monkeypatch.setattr(harness, "run_cell", lambda *a: calls.append(a[1].row) or real(*a))
+    again = harness.run(suite(), entries, str(tmp_path))
+    assert sorted(calls) == ["N=20", "N=30"]  # only the failed cells are retried
+    assert json.dumps(again["orca"]) == json.dumps(board["orca"])
+    calls.clear()
+    harness.run(suite(episodes=5), entries[:1], str(tmp_path))
+    assert len(calls) == 3  # another budget is another fingerprint
+
+
+def test_a_failing_pedestrian_model_is_reported_by_name(tmp_path, monkeypatch):
+    from crowdbench.humans.base import PedestrianModelError
+    from crowdbench.worlds import CrowdWorld
+
+    world = CrowdWorld(num_worlds=1, human_model="linear")
+    monkeypatch.setattr(world.human_model, "step", lambda state, rngs: np.full((1, world.num_humans, 2), np.inf))
+    with pytest.raises(PedestrianModelError, match="pedestrian model Linear returned NaN or inf"):
+        world.step(np.zeros((1, 2)))
+    assert "linear" in HUMAN_MODELS.names()
+
+
+def test_workers_give_identical_files(tmp_path):
+    entries = [leaderboard.ENTRIES["orca"], leaderboard.ENTRIES["social_force"]]
+    harness.run(suite(), entries, str(tmp_path / "one"))
+    harness.run(suite(), entries, str(tmp_path / "two"), workers=2)
+    for name in ("orca.json", "social_force.json"):
+        assert stable(tmp_path / "one" / name) == stable(tmp_path / "two" / name)
+    assert (tmp_path / "one" / "LEADERBOARD.md").read_text() == (tmp_path / "two" / "LEADERBOARD.md").read_text()
+
+
+def test_a_killed_run_resumes_without_losing_or_recomputing_a_cell(tmp_path):
+    toml = tmp_path / "s.toml"
+    toml.write_text('episodes = 24\ntables = ["II"]\nworlds = 8\ncounterfactual = false\n')
+    cmd = [sys.executable, "-m", "crowdbench.cli", "leaderboard", "run", "--suite", str(toml), "--methods",
+           "orca,social_force,linear", "--out"]
+    proc = subprocess.Popen([*cmd, str(tmp_path / "killed")], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    cells_dir = tmp_path / "killed" / "cells"
+    deadline = time.time() + 300
+    while time.time() < deadline and len(list(cells_dir.rglob("*.json"))) < 3 and proc.poll() is None:
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    before = {p: p.stat().st_mtime_ns for p in cells_dir.rglob("*.json")}
+    assert 3 <= len(before) < 9, "the run should have been killed mid-way"
+    out = subprocess.run([*cmd, str(tmp_path / "killed")], capture_output=True, text=True, check=True).stdout
+    assert f"{len(before)} stored, {9 - len(before)} to run" in out
+    assert all(p.stat().st_mtime_ns == t for p, t in before.items())  # nothing finished was recomputed
+    subprocess.run([*cmd, str(tmp_path / "straight")], capture_output=True, check=True)
+    for name in ("orca.json", "social_force.json", "linear.json"):
+        assert stable(tmp_path / "killed" / name) == stable(tmp_path / "straight" / name)
+    board = [(tmp_path / run / "LEADERBOARD.md").read_text() for run in ("killed", "straight")]
+    assert board[0] == board[1]
+
+
+@pytest.mark.slow
+def test_ray_backend_equals_local(tmp_path):
+    pytest.importorskip("ray")
+    entries = [leaderboard.ENTRIES["orca"], leaderboard.ENTRIES["social_force"]]
+    quick = harness.load_suite("quick", episodes=6)
+    harness.run(quick, entries, str(tmp_path / "local"), workers=2)
+    harness.run(quick, entries, str(tmp_path / "ray"), workers=2, backend="ray")
+    for name in ("orca.json", "social_force.json"):
+        assert stable(tmp_path / "local" / name) == stable(tmp_path / "ray" / name)
+
+
+def test_cli_leaderboard_list_and_errors(capsys):
+    from crowdbench.cli import main
+
+    assert main(["leaderboard", "list"]) == 0
+    out = capsys.readouterr().out
+    assert "orca" in out and "quick" in out and "shipped checkpoints" in out
+    assert main(["leaderboard", "run", "--suite", "quick", "--methods", "nope"]) == 2
+    assert "--methods: unknown 'nope'" in capsys.readouterr().err
+    assert main(["leaderboard", "run", "--suite", "quick", "--methods", "orca", "--backend", "spark"]) == 2
+    assert "valid choices: local, ray" in capsys.readouterr().err
+    assert os.path.exists(harness.SUITES_DIR / "paper.toml")
