@@ -21,12 +21,11 @@ import json
 import os
 import sys
 import time
+import tomllib
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
-
-import tomllib
 
 from crowdbench.io import write_text
 from crowdbench.leaderboard import Cell, Entry, cells, leaderboard_markdown, markdown, scenario_digest
