@@ -34,14 +34,16 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 def demo(args: argparse.Namespace) -> int:
     """Run one episode with the chosen robot policy, print its outcome and write an animated GIF."""
-    args.policy = args.policy or "orca"
     from crowdbench.envs import CrowdParallelEnv
     from crowdbench.render import save_gif
 
+    name = getattr(args, "policy_pos", None) or args.policy or "orca"
     env = CrowdParallelEnv(layout=args.layout, num_humans=args.humans, human_model=args.human_model,
                            human_model_kwargs=_model_kwargs(args.human_model, args.responsiveness),
-                           render_mode="rgb_array", observation=POLICIES.get(args.policy).observation)
-    policy = make_policy(args.policy, env.config)
+                           render_mode="rgb_array", observation=POLICIES.get(name).observation)
+    args.policy, args.policy_pos = name, None
+    args.checkpoint = getattr(args, "checkpoint", None)
+    policy = _policy(args, env.config)
     obs, _ = env.reset(seed=args.seed)
     frames = [env.render()]
     path, info = 0.0, {}
@@ -59,7 +61,7 @@ def demo(args: argparse.Namespace) -> int:
     return 0
 
 
-def _policy(args: argparse.Namespace):
+def _policy(args: argparse.Namespace, config=None):
     """The policy named positionally or by ``--policy`` (with ``--checkpoint`` for checkpoint-backed ones)."""
     import inspect
 
@@ -70,7 +72,7 @@ def _policy(args: argparse.Namespace):
     if args.checkpoint and "checkpoint" not in inspect.signature(factory).parameters:
         raise ValueError(f"--checkpoint: policy {name!r} takes no checkpoint; checkpoint-backed policies: "
                          + ", ".join(n for n in POLICIES.names() if n in CHECKPOINT_POLICIES))
-    return make_policy(name or "orca", **({"checkpoint": args.checkpoint} if args.checkpoint else {}))
+    return make_policy(name or "orca", config, **({"checkpoint": args.checkpoint} if args.checkpoint else {}))
 
 
 CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl")
@@ -321,6 +323,12 @@ def main(argv: list[str] | None = None) -> int:
     p = sub.add_parser("demo", help="run one rendered episode and write a GIF")
     _common(p)
     p.add_argument("--gif", default="demo.gif", help="output GIF path")
+    p.set_defaults(func=demo)
+    p = sub.add_parser("render", help="one episode of any policy as an animated GIF (same as demo, policy first)")
+    _common(p)
+    p.add_argument("policy_pos", nargs="?", default=None, metavar="POLICY", help="robot policy (same as --policy)")
+    p.add_argument("--checkpoint", default=None, help="checkpoint of a checkpoint-backed policy")
+    p.add_argument("--out", dest="gif", default="episode.gif", help="output GIF path")
     p.set_defaults(func=demo)
     p = sub.add_parser("evaluate", help="batched evaluation of a robot policy")
     _common(p)

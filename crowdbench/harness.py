@@ -28,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from crowdbench.io import write_text
-from crowdbench.leaderboard import Cell, Entry, cells, leaderboard_markdown, markdown, scenario_digest
+from crowdbench.leaderboard import Cell, Entry, cells, leaderboard_markdown, markdown, plot_board, scenario_digest
 
 SUITES_DIR = Path(__file__).resolve().parent / "suites"
 BACKENDS = ("local", "ray")
@@ -302,6 +302,8 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
     groups = {e.label: e.group for e in entries}
     write_text(os.path.join(out, "LEADERBOARD.md"),
                leaderboard_markdown(board, groups, suite.episodes, suite.seed, suite=suite.name))
+    if {"I", "II"} & set(suite.tables):
+        plot_board(board, os.path.join(out, "success.png"), groups)
     return board
 
 

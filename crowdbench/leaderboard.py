@@ -17,6 +17,8 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from crowdbench.evaluation import run_episodes, summarize
 from crowdbench.io import write_text
 from crowdbench.metrics import wilson
@@ -148,6 +150,53 @@ def save(results: list[dict[str, Any]], json_path: str | None, md_path: str | No
         write_text(json_path, json.dumps({"meta": meta, "results": results}, indent=2) + "\n")
     if md_path:
         write_text(md_path, markdown(results))
+
+
+def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[str, str] | None = None) -> None:
+    """Success against the response regime ρ (Table I, N = 20) and against crowd size N (Table II, ρ = 0), one line
+    per main method with its Wilson 95 % band; seed entries of a method widen its band to their envelope."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from crowdbench.io import atomic_path
+
+    groups = groups or {}
+    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100, sharey=True)
+    specs = (("I", "responsiveness", "mean responsiveness ρ (Table I, N = 20)"),
+             ("II", "humans", "pedestrians N (Table II, ρ = 0)"))
+    for ax, (table, key, xlabel) in zip(axes, specs, strict=True):
+        for label in board:
+            if groups.get(label, "main") != "main":
+                continue
+            family = [label] + [lb for lb, g in groups.items() if g == f"seeds:{label}" and lb in board]
+            pts: dict[float, list[tuple[float, float, float]]] = {}
+            for lb in family:
+                for r in board[lb]:
+                    if r["table"] == table and "error" not in r:
+                        lo, hi = r.get("ci", {}).get("success_rate", (r["success_rate"],) * 2)
+                        pts.setdefault(r[key], []).append((r["success_rate"], lo, hi))
+            if not pts:
+                continue
+            xs = sorted(pts)
+            mean = [100 * np.mean([p[0] for p in pts[x]]) for x in xs]
+            lo = [100 * min(p[1] for p in pts[x]) for x in xs]
+            hi = [100 * max(p[2] for p in pts[x]) for x in xs]
+            n_seeds = len(family)
+            (line,) = ax.plot(xs, mean, "o-", label=label + (f" ({n_seeds} seeds)" if n_seeds > 1 else ""))
+            ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
+        ticks = sorted({r[key] for rows in board.values() for r in rows if r["table"] == table})
+        ax.set_xticks(ticks)
+        ax.set_xlabel(xlabel)
+        ax.grid(alpha=0.3)
+    axes[0].set_ylabel("success rate [%] (band: 95 % interval)")
+    axes[0].invert_xaxis()  # harder to the right: less responsive
+    axes[1].legend(fontsize=8, loc="lower left")
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
 
 
 def plot_trends(result_files: list[str], path: str) -> None:

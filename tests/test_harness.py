@@ -168,3 +168,15 @@ def test_cli_leaderboard_list_and_errors(capsys):
     assert main(["leaderboard", "run", "--suite", "quick", "--methods", "orca", "--backend", "spark"]) == 2
     assert "valid choices: local, ray" in capsys.readouterr().err
     assert os.path.exists(harness.SUITES_DIR / "paper.toml")
+
+
+def test_render_writes_one_episode_of_any_policy(tmp_path, capsys):
+    from PIL import Image
+
+    from crowdbench.cli import main
+
+    out = tmp_path / "episode.gif"
+    assert main(["render", "social_force", "--layout", "split_flow", "--humans", "6", "--seed", "3",
+                 "--out", str(out)]) == 0
+    frames = Image.open(out).n_frames
+    assert frames >= 2 and f"frames={frames}" in capsys.readouterr().out
