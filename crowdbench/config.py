@@ -7,7 +7,13 @@ import math
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
+from crowdbench.validate import check_fields
+
 KINEMATICS = ("holonomic", "unicycle")
+MAX_HUMANS = 1000
+"""Upper bound on pedestrians per world (ORCA's pairwise work and memory grow with its square)."""
 
 
 @dataclass(frozen=True)
@@ -28,6 +34,12 @@ class RewardConfig:
     """Added on every step [-]."""
     goal_tolerance: float = 0.3
     """Success when the robot centre is within this distance of its goal [m]."""
+
+    def __post_init__(self) -> None:
+        check_fields(self)
+        if not self.goal_tolerance > 0 or not self.discomfort_dist >= 0:
+            raise ValueError(f"goal_tolerance={self.goal_tolerance}, discomfort_dist={self.discomfort_dist}; valid "
+                             "choices: goal_tolerance > 0 and discomfort_dist ≥ 0 [m]")
 
 
 @dataclass(frozen=True)
@@ -84,6 +96,7 @@ class WorldConfig:
     reward: RewardConfig = field(default_factory=RewardConfig)
 
     def __post_init__(self) -> None:
+        check_fields(self)
         if self.kinematics not in KINEMATICS:
             raise ValueError(f"kinematics={self.kinematics!r}; valid choices: {', '.join(KINEMATICS)}")
         positive = ("time_step", "time_limit", "robot_radius", "human_radius", "robot_v_pref", "human_v_pref",
@@ -91,14 +104,15 @@ class WorldConfig:
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)!r}")
-        if self.num_humans < 0:
-            raise ValueError(f"num_humans must be ≥ 0, got {self.num_humans}")
-        if self.max_humans_observed < 1:
-            raise ValueError(f"max_humans_observed must be ≥ 1, got {self.max_humans_observed}")
+        if not 0 <= self.num_humans <= MAX_HUMANS:
+            raise ValueError(f"num_humans={self.num_humans}; valid choices: 0 … {MAX_HUMANS}")
+        if not 1 <= self.max_humans_observed <= MAX_HUMANS:
+            raise ValueError(f"max_humans_observed={self.max_humans_observed}; valid choices: 1 … {MAX_HUMANS}")
         if self.humans_range is not None:
             lo, hi = self.humans_range
-            if not 0 <= lo <= hi:
-                raise ValueError(f"humans_range must satisfy 0 ≤ lo ≤ hi, got {self.humans_range}")
+            if not 0 <= lo <= hi <= MAX_HUMANS:
+                raise ValueError(f"humans_range={self.humans_range}; valid choices: (lo, hi) with 0 ≤ lo ≤ hi ≤ "
+                                 f"{MAX_HUMANS}")
         if self.human_speed_cap is not None and not self.human_speed_cap > 0:
             raise ValueError(f"human_speed_cap={self.human_speed_cap!r}; valid choices: None or a speed > 0 [m/s]")
         for name in ("human_radius_range", "human_v_pref_range"):
@@ -126,6 +140,9 @@ def make_config(**kwargs: Any) -> WorldConfig:
     unknown = sorted(set(kwargs) - valid)
     if unknown:
         raise TypeError(f"unknown world option(s) {unknown}; valid options: {', '.join(sorted(valid))}")
+    for key in ("human_radius_range", "human_v_pref_range"):
+        if isinstance(kwargs.get(key), list):
+            kwargs[key] = tuple(kwargs[key])
     if isinstance(kwargs.get("reward"), dict):
         rvalid = {f.name for f in dataclasses.fields(RewardConfig)}
         bad = sorted(set(kwargs["reward"]) - rvalid)
@@ -133,7 +150,12 @@ def make_config(**kwargs: Any) -> WorldConfig:
             raise TypeError(f"unknown reward option(s) {bad}; valid options: {', '.join(sorted(rvalid))}")
         kwargs["reward"] = RewardConfig(**kwargs["reward"])
     if "obstacles" in kwargs:
-        kwargs["obstacles"] = tuple(tuple((float(x), float(y)) for x, y in poly) for poly in kwargs["obstacles"])
-    if kwargs.get("humans_range") is not None:
-        kwargs["humans_range"] = tuple(int(v) for v in kwargs["humans_range"])
+        try:
+            kwargs["obstacles"] = tuple(tuple((float(x), float(y)) for x, y in poly) for poly in kwargs["obstacles"])
+        except (TypeError, ValueError):
+            raise ValueError(f"obstacles={kwargs['obstacles']!r}; valid choices: a list of obstacles, each a list of "
+                             "(x, y) vertices [m]") from None
+    hr = kwargs.get("humans_range")
+    if isinstance(hr, (list, tuple)) and all(isinstance(v, (int, np.integer)) for v in hr):
+        kwargs["humans_range"] = tuple(int(v) for v in hr)
     return WorldConfig(**kwargs)

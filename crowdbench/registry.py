@@ -73,8 +73,15 @@ class Registry(Generic[T]):
         return factory
 
     def make(self, name: str, **kwargs) -> T:
-        """Instantiate ``name`` with ``kwargs``."""
-        return self.get(name)(**kwargs)
+        """Instantiate ``name`` with ``kwargs`` (checked against the factory's signature and annotations first: an
+        unknown argument or a value of the wrong type is one ``ValueError`` naming it)."""
+        from crowdbench.validate import check_call
+
+        if not isinstance(name, str):
+            raise ValueError(f"{self.kind} name {name!r}; valid choices: {', '.join(self.names())}")
+        factory = self.get(name)
+        check_call(factory, kwargs, f"{self.kind} {name!r}")
+        return factory(**kwargs)
 
     def __contains__(self, name: str) -> bool:
         return name in self.names()

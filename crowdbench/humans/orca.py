@@ -15,6 +15,7 @@ import numpy as np
 
 from crowdbench.humans.base import CrowdState, HumanModel, preferred_velocity, register
 from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
+from crowdbench.validate import check_fields
 
 
 @dataclass(frozen=True)
@@ -37,6 +38,7 @@ class ORCAParams:
     """Extra clearance added to every radius inside ORCA [m] (CrowdNav++: 0.15 for pedestrians and robot)."""
 
     def __post_init__(self) -> None:
+        check_fields(self)
         for name in ("neighbor_dist", "time_horizon", "time_horizon_obst"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")

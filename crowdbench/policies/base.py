@@ -71,4 +71,4 @@ register = POLICIES.register
 
 def make_policy(name: str, config: WorldConfig | None = None, **kwargs) -> RobotPolicy:
     """Instantiate a robot policy by registry name."""
-    return POLICIES.get(name)(config=config, **kwargs)
+    return POLICIES.make(name, config=config, **kwargs)
