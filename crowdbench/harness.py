@@ -29,6 +29,7 @@ from typing import Any
 
 from crowdbench.io import write_text
 from crowdbench.leaderboard import Cell, Entry, cells, leaderboard_markdown, markdown, plot_board, scenario_digest
+from crowdbench.validate import check_fields
 
 SUITES_DIR = Path(__file__).resolve().parent / "suites"
 BACKENDS = ("local", "ray")
@@ -56,7 +57,8 @@ class Suite:
     """Run the robot-absent twin for the pedestrians' delay (doubles the crowd simulation)."""
 
     def __post_init__(self) -> None:
-        if not self.name or not isinstance(self.name, str):
+        check_fields(self)
+        if not self.name:
             raise ValueError(f"suite name={self.name!r}; valid choices: a non-empty string")
         for key in ("episodes", "worlds"):
             if not isinstance(getattr(self, key), int) or getattr(self, key) < 1:

@@ -89,6 +89,11 @@ def check_call(factory: Any, kwargs: dict[str, Any], owner: str) -> None:
     import inspect
 
     target = factory.__init__ if inspect.isclass(factory) else factory
+    if target is object.__init__:  # a class without its own constructor takes no arguments
+        if kwargs:
+            raise ValueError(f"{owner}: unknown argument {next(iter(kwargs))!r}; valid choices: none (it takes no "
+                             "arguments)")
+        return
     try:
         sig = inspect.signature(target)
         hints = typing.get_type_hints(target)

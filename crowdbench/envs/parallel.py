@@ -46,6 +46,11 @@ class CrowdParallelEnv(ParallelEnv):
                  max_cycles: int | None = None, human_model_kwargs: dict | None = None, **world_options: Any):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode={render_mode!r}; valid choices: None, 'rgb_array'")
+        if max_cycles is not None and (not isinstance(max_cycles, (int, np.integer)) or isinstance(max_cycles, bool)
+                                       or max_cycles < 1):
+            raise ValueError(f"max_cycles={max_cycles!r}; valid choices: None or an integer ≥ 1")
+        if seed is not None and (not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0):
+            raise ValueError(f"seed={seed!r}; valid choices: None or an integer ≥ 0")
         self.world = build_world(layout, num_humans, human_model, human_model_kwargs, world_options)
         self.config = self.world.config
         self.render_mode = render_mode

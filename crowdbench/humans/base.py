@@ -105,7 +105,12 @@ register = HUMAN_MODELS.register
 
 def make(name: str | HumanModel, **kwargs) -> HumanModel:
     """Instantiate a pedestrian model by registry name (an instance is passed through)."""
-    return name if isinstance(name, HumanModel) else HUMAN_MODELS.make(name, **kwargs)
+    if isinstance(name, HumanModel):
+        return name
+    if not isinstance(name, str):
+        raise ValueError(f"human_model={name!r}; valid choices: a HumanModel instance or one of "
+                         f"{', '.join(HUMAN_MODELS.names())}")
+    return HUMAN_MODELS.make(name, **kwargs)
 
 
 def preferred_velocity(positions: np.ndarray, goals: np.ndarray, v_pref: np.ndarray, time_step: float) -> np.ndarray:

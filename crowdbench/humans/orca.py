@@ -8,6 +8,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -47,6 +48,15 @@ class ORCAParams:
         if self.safety_space < 0:
             raise ValueError(f"safety_space must be ≥ 0, got {self.safety_space}")
 
+    @classmethod
+    def of(cls, owner: str, **params) -> ORCAParams:
+        """``ORCAParams(**params)``, an unknown name being one ``ValueError`` naming ``owner`` and the valid ones."""
+        valid = [f.name for f in dataclasses.fields(cls)]
+        unknown = sorted(set(params) - set(valid))
+        if unknown:
+            raise ValueError(f"{owner}: unknown argument(s) {unknown}; valid choices: {', '.join(valid)}")
+        return cls(**params)
+
     def neighbors(self, num_agents: int) -> int:
         """The neighbour cap for a world of ``num_agents`` agents."""
         return num_agents if self.max_neighbors is None else self.max_neighbors
@@ -56,7 +66,7 @@ class ORCABase(HumanModel):
     """Shared machinery: agent arrays ``[robot, humans...]`` per world, handed to :func:`orca_batch`."""
 
     def __init__(self, **params) -> None:
-        self.params = ORCAParams(**params)
+        self.params = ORCAParams.of(f"pedestrian model {type(self).__name__}", **params)
 
     def bind(self, num_worlds: int, num_humans: int, obstacles, time_step: float) -> None:
         super().bind(num_worlds, num_humans, obstacles, time_step)

@@ -36,7 +36,7 @@ class ORCAPolicy(RobotPolicy):
 
     def __init__(self, config=None, **params) -> None:
         super().__init__(config)
-        self.params = ORCAParams(**params)
+        self.params = ORCAParams.of("robot policy orca", **params)
         self._obst = build_obstacles(self.config.obstacles)
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:

@@ -147,4 +147,6 @@ def human_observations(world, b: int) -> dict[str, np.ndarray]:
 
 def make_observation(name: str, config: WorldConfig) -> Observation:
     """Robot observation builder by registry name."""
+    if not isinstance(name, str):
+        raise ValueError(f"observation={name!r}; valid choices: {', '.join(OBSERVATIONS.names())}")
     return OBSERVATIONS.get(name)(config)

@@ -419,4 +419,8 @@ class RandomWander(Layout):
 
 def make_layout(name: str | Layout, **kwargs) -> Layout:
     """Resolve a layout by registry name (or pass an instance through)."""
-    return name if isinstance(name, Layout) else LAYOUTS.make(name, **kwargs)
+    if isinstance(name, Layout):
+        return name
+    if not isinstance(name, str):
+        raise ValueError(f"layout={name!r}; valid choices: a Layout instance or one of {', '.join(LAYOUTS.names())}")
+    return LAYOUTS.make(name, **kwargs)

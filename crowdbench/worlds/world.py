@@ -80,8 +80,13 @@ class CrowdWorld:
         human_model_kwargs: dict | None = None,
     ) -> None:
         self.config = config = config or WorldConfig()
-        if num_worlds < 1:
-            raise ValueError(f"num_worlds must be ≥ 1, got {num_worlds}")
+        if not isinstance(config, WorldConfig):
+            raise ValueError(f"config={config!r}; valid choices: a WorldConfig (crowdbench.config.make_config)")
+        if not isinstance(num_worlds, (int, np.integer)) or isinstance(num_worlds, bool) or num_worlds < 1:
+            raise ValueError(f"num_worlds={num_worlds!r}; valid choices: an integer ≥ 1")
+        if human_model_kwargs is not None and not isinstance(human_model_kwargs, dict):
+            raise ValueError(f"human_model_kwargs={human_model_kwargs!r}; valid choices: None or a dict of the "
+                             "pedestrian model's arguments")
         self.num_worlds = B = num_worlds
         self.num_humans = H = config.max_humans
         self.num_agents = A = H + 1
