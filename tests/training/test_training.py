@@ -174,7 +174,8 @@ def test_legacy_checkpoints_evaluate_but_do_not_resume(tmp_path, capsys):
     assert code == 2 and "cannot be resumed" in capsys.readouterr().err
 
 
-def test_checkpoint_that_would_run_code_is_refused(tmp_path, capsys):
+@pytest.mark.parametrize("method", ["h2int", "cadrl", "sarl"])
+def test_checkpoint_that_would_run_code_is_refused(tmp_path, capsys, method):
     import os
     import pickle
 
@@ -186,8 +187,8 @@ def test_checkpoint_that_would_run_code_is_refused(tmp_path, capsys):
 
     path = tmp_path / "evil.pt"
     with open(path, "wb") as f:
-        pickle.dump({"format": checkpoints.FORMAT, "method": "h2int", "payload": Evil()}, f)
-    assert main(["evaluate", "h2int", "--checkpoint", str(path), "--episodes", "1"]) == 2
+        pickle.dump({"format": checkpoints.FORMAT, "method": method, "payload": Evil()}, f)
+    assert main(["evaluate", method, "--checkpoint", str(path), "--episodes", "1"]) == 2
     err = capsys.readouterr().err
     assert "refused" in err and "run code" in err and not marker.exists()
 
