@@ -82,12 +82,15 @@ CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl")
 def evaluate(args: argparse.Namespace) -> int:
     """Batched evaluation of a registered policy; prints the paper's six metrics (optionally writes JSON)."""
     from crowdbench.evaluation import run_episodes, summarize
+    from crowdbench.progress import Progress
 
     policy = _policy(args)
+    bar = Progress(args.episodes, "episodes")
     eps = run_episodes(policy, args.episodes, seed=args.seed, num_worlds=args.worlds, layout=args.layout,
                        num_humans=args.humans, human_model=args.human_model,
                        human_model_kwargs=_model_kwargs(args.human_model, args.responsiveness),
-                       counterfactual=args.pedestrian_delay)
+                       counterfactual=args.pedestrian_delay, progress=bar.update)
+    bar.close()
     summary = summarize(eps)
     for k, v in summary.items():
         if k == "ci":

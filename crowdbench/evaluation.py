@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -24,11 +25,12 @@ from crowdbench.worlds.world import OUTCOMES, CrowdWorld
 def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: int = 16,
                  layout: str = "circle_crossing", num_humans: int = 20, human_model: Any = "responsive_orca",
                  human_model_kwargs: dict | None = None, counterfactual: bool = False,
-                 **world_options: Any) -> list[Episode]:
+                 progress: Callable[[int], None] | None = None, **world_options: Any) -> list[Episode]:
     """Run ``episodes`` episodes of ``policy`` in a batch of ``num_worlds`` worlds; returns them ordered by seed.
 
     With ``counterfactual``, a twin batch of the same seeds runs alongside with the robot absent (invisible to the
     pedestrians), for the pedestrians' delay (:mod:`crowdbench.metrics`); it costs a second crowd simulation.
+    ``progress`` is called with the number of finished episodes whenever episodes finish.
     """
     if episodes < 1:
         raise ValueError(f"episodes must be ≥ 1, got {episodes}")
@@ -69,6 +71,8 @@ def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: 
             outcome = OUTCOMES[int(res.outcome[b])]
             out.append(Episode(int(ep_seed[b]), outcome, float(world.steps[b] * world.dt), float(path[b]),
                                float(max_dv[b]), **meter.episode(b, outcome, float(path[b]))))
+        if done.any() and progress is not None:
+            progress(len(out))
         if done.any():
             restart = done.copy()
             for b in np.flatnonzero(done):

@@ -62,7 +62,8 @@ def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed
     from crowdbench.worlds import make_layout
 
     results = []
-    for c in grid:
+    t_start = time.time()
+    for k, c in enumerate(grid, 1):
         t = time.time()
         policy = make_policy(policy_name, **(policy_kwargs or {}))
         eps = run_episodes(policy, episodes, seed=seed, num_worlds=num_worlds,
@@ -75,9 +76,10 @@ def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed
                         "humans": c.humans, "responsiveness": c.rho, "seed": seed, **s,
                         "wall_s": round(time.time() - t, 1)})
         if progress:
-            print(f"Table {c.table:<3} {c.row:<26} success {s['success_rate']:.3f} collision {s['collision_rate']:.3f}"
-                  f" timeout {s['timeout_rate']:.3f} time {s['nav_time']:.2f} path {s['path_length']:.2f}"
-                  f" dv {s['delta_v']:.2f}", flush=True)
+            eta = (time.time() - t_start) / k * (len(grid) - k)
+            print(f"[{k}/{len(grid)}] Table {c.table:<3} {c.row:<26} success {s['success_rate']:.3f} collision "
+                  f"{s['collision_rate']:.3f} timeout {s['timeout_rate']:.3f} time {s['nav_time']:.2f} path "
+                  f"{s['path_length']:.2f} dv {s['delta_v']:.2f} | ETA {eta / 60:.1f} min", flush=True)
     return results
 
 
