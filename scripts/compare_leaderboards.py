@@ -1,0 +1,42 @@
+"""Compare two leaderboard folders, timing and provenance fields aside (the reproducibility check of the
+leaderboard: regenerate into a fresh folder, then compare with the published one).
+
+    crowdbench leaderboard run --suite paper --force --out /tmp/regenerated
+    python scripts/compare_leaderboards.py leaderboards /tmp/regenerated
+
+Exit status 0 when every method file, every stored cell and LEADERBOARD.md agree; otherwise the differences are listed.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+VOLATILE = {"wall_s", "provenance"}
+
+
+def strip(x):
+    if isinstance(x, dict):
+        return {k: strip(v) for k, v in x.items() if k not in VOLATILE}
+    if isinstance(x, list):
+        return [strip(v) for v in x]
+    return x
+
+
+def main(a: str, b: str) -> int:
+    a_dir, b_dir = Path(a), Path(b)
+    files = sorted({p.relative_to(b_dir) for p in b_dir.rglob("*.json")} & {p.relative_to(a_dir)
+                                                                            for p in a_dir.rglob("*.json")})
+    bad = [str(f) for f in files
+           if strip(json.loads((a_dir / f).read_text())) != strip(json.loads((b_dir / f).read_text()))]
+    if (a_dir / "LEADERBOARD.md").read_text() != (b_dir / "LEADERBOARD.md").read_text():
+        bad.append("LEADERBOARD.md")
+    print(f"compared {len(files)} JSON files and LEADERBOARD.md: {'identical' if not bad else 'DIFFERENT'}")
+    for f in bad:
+        print(f"  differs: {f}")
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(*sys.argv[1:3]))
