@@ -421,7 +421,8 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                     if r is best[s]:
                         succ = f"**{succ}**"
                     cellsx.append(f"{succ}{_ci(r, 'success_rate', 100, 0)} / {100 * r['collision_rate']:.1f} / "
-                                  f"{100 * r['timeout_rate']:.1f} · {r['nav_time']:.1f} s")
+                                  f"{100 * r['timeout_rate']:.1f} · " + (f"{r['nav_time']:.1f} s"
+                                                                           if math.isfinite(r["nav_time"]) else "—"))
                 out.append(f"| {lb} | " + " | ".join(cellsx) + " |")
             if group.startswith("seeds"):
                 stats = []
