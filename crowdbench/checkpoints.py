@@ -53,6 +53,12 @@ def resolve(method: str, checkpoint: str | os.PathLike | None) -> str:
     return path
 
 
+def run_checkpoint(path: str | os.PathLike) -> str:
+    """The checkpoint to resume from: ``path/last.pt`` for a run folder, else ``path`` itself."""
+    path = os.fspath(path)
+    return os.path.join(path, "last.pt") if os.path.isdir(path) else path
+
+
 def load(path: str | os.PathLike, method: str | None = None) -> dict[str, Any]:
     """Load and validate a checkpoint (``weights_only=True``); ``method`` checks what it holds.
 

@@ -9,6 +9,7 @@ import sys
 
 import numpy as np
 
+from crowdbench import checkpoints
 from crowdbench.humans import HUMAN_MODELS
 from crowdbench.io import write_text
 from crowdbench.policies import POLICIES, make_policy
@@ -124,7 +125,7 @@ def train_cmd(args: argparse.Namespace) -> int:
     method = PPO_METHODS.get(args.algo)()
     speed = {name: getattr(args, name) for name in RESUMABLE if getattr(args, name) is not None}
     if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
-        path = os.path.join(args.resume, "last.pt") if os.path.isdir(args.resume) else args.resume
+        path = checkpoints.run_checkpoint(args.resume)
         cfg = resume_config(path, **speed)
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
@@ -156,7 +157,7 @@ def train_value_cmd(args: argparse.Namespace) -> int:
         raise ValueError(f"{', '.join(ppo_only)}: options of the PPO methods, not of {args.algo}")
     speed = {k: getattr(args, k) for k in ("minutes", "threads") if getattr(args, k) is not None}
     if args.resume:
-        path = os.path.join(args.resume, "last.pt") if os.path.isdir(args.resume) else args.resume
+        path = checkpoints.run_checkpoint(args.resume)
         cfg = resume_config(path, **speed)
         if cfg.method != args.algo:
             raise ValueError(f"--resume: {path!r} is a {cfg.method} run, not {args.algo}")
@@ -302,7 +303,7 @@ def leaderboard_run_cmd(args: argparse.Namespace) -> int:
 
 def leaderboard_list_cmd(args: argparse.Namespace) -> int:
     """The shipped leaderboard entries, every registered policy with its shipped checkpoints, and the suites."""
-    from crowdbench import checkpoints, harness, leaderboard
+    from crowdbench import harness, leaderboard
 
     print("leaderboard entries (crowdbench leaderboard run --methods NAME,...):")
     for slug, e in leaderboard.ENTRIES.items():

@@ -255,7 +255,7 @@ def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = F
     trainer = Trainer(cfg, out, quiet=quiet)
     try:
         if resume:
-            trainer.load(os.path.join(resume, "last.pt") if os.path.isdir(resume) else resume)
+            trainer.load(checkpoints.run_checkpoint(resume))
         trainer.train()
     finally:
         trainer.close()

@@ -201,11 +201,9 @@ class ValueTrainConfig:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> ValueTrainConfig:
-        names = {f.name for f in dataclasses.fields(cls)}
-        unknown = sorted(set(d) - names)
-        if unknown:
-            raise ValueError(f"value train config: unknown keys {unknown}; valid choices: {', '.join(sorted(names))}")
-        return cls(**d)
+        from crowdbench.training.config import _strict
+
+        return _strict(cls, d, "value train config")
 
     def epsilon(self, episode: int) -> float:
         """CrowdNav's linear exploration schedule at RL episode ``episode``."""
@@ -571,6 +569,8 @@ def train_value(cfg: ValueTrainConfig, out: str, resume: str | None = None, quie
     """Train (or resume from ``resume``: a run folder or its ``last.pt``); returns the trainer."""
     trainer = ValueTrainer(cfg, out, quiet=quiet)
     if resume:
-        trainer.load(os.path.join(resume, "last.pt") if os.path.isdir(resume) else resume)
+        from crowdbench import checkpoints
+
+        trainer.load(checkpoints.run_checkpoint(resume))
     trainer.train()
     return trainer

@@ -12,7 +12,7 @@ import torch
 from crowdbench import checkpoints
 from crowdbench.config import WorldConfig
 from crowdbench.policies.base import RobotPolicy
-from crowdbench.policies.value.lookahead import Scene, action_set, action_values, current_state
+from crowdbench.policies.value.lookahead import Scene, action_set, action_values
 from crowdbench.policies.value.model import build_net
 
 GAMMA = 0.9
@@ -78,12 +78,6 @@ class ValuePolicy(RobotPolicy):
 
     def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
         return self.plan(obs)[0]
-
-    @torch.inference_mode()
-    def state_of(self, obs: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
-        """Joint states ``(B, K, 13)`` and masks ``(B, K)`` of observations (for the replay memory)."""
-        scene = Scene.from_obs(obs, self.sensing_range)
-        return current_state(scene).numpy(), scene.mask.numpy()
 
 
 class CADRLPolicy(ValuePolicy):
