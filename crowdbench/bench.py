@@ -96,6 +96,47 @@ def env_steps_per_s(n: int, batch: int, steps: int, repeats: int) -> dict[str, f
     return _repeat(run, repeats)
 
 
+def pettingzoo_steps_per_s(n: int, steps: int, repeats: int, resets: bool) -> dict[str, float]:
+    """One world through ``crowdbench.parallel_env`` (defaults: circle crossing, ORCA pedestrians, every agent's
+    observation and info built): the robot heads for its goal at full speed (computed from its observation, outside
+    the timer), pedestrians are model-driven. Each repeat times ``steps`` calls of ``env.step``; a finished episode
+    is followed by ``reset`` — inside the timer when ``resets``, outside otherwise (as CrowdNav's figures are
+    quoted both ways)."""
+    import crowdbench
+
+    env = crowdbench.parallel_env(num_humans=n)
+
+    def action(obs: dict) -> dict[str, np.ndarray]:
+        r = obs["robot"]["robot"]
+        d = r[3:5] - r[0:2]
+        return {"robot": d / max(float(np.hypot(*d)), 1e-9)}
+
+    obs, _ = env.reset(seed=0)
+    for _ in range(20):  # warm-up (compiled kernels)
+        obs, *_ = env.step(action(obs))
+
+    def run(seed: int) -> float:
+        obs, _ = env.reset(seed=seed)
+        elapsed, episodes = 0.0, seed
+        for _ in range(steps):
+            a = action(obs)
+            t = time.perf_counter()
+            obs, _, term, trunc, _ = env.step(a)
+            if term["robot"] or trunc["robot"]:
+                if resets:
+                    obs, _ = env.reset(seed=episodes + 1000)
+                    elapsed += time.perf_counter() - t
+                else:
+                    elapsed += time.perf_counter() - t
+                    obs, _ = env.reset(seed=episodes + 1000)
+                episodes += 1
+            else:
+                elapsed += time.perf_counter() - t
+        return steps / elapsed
+
+    return _stats([run(r) for r in range(repeats)])
+
+
 def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> dict[str, float]:
     from crowdbench.humans import preferred_velocity
     from crowdbench.humans.orca_kernel import build_obstacles, orca_batch

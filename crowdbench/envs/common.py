@@ -29,8 +29,9 @@ def robot_action_space(config: WorldConfig) -> spaces.Box:
                       np.array([config.robot_v_pref, config.max_angular_speed], np.float32), dtype=np.float32)
 
 
-def robot_info(world: CrowdWorld, res: StepResult | None) -> dict[str, Any]:
-    """The robot's info dict for world 0: outcome, named reward terms, clearance, overlaps, crowd analysis arrays."""
+def robot_info(world: CrowdWorld, res: StepResult | None, crowd: dict[str, np.ndarray] | None = None) -> dict[str, Any]:
+    """The robot's info dict for world 0: outcome, named reward terms, clearance, overlaps, crowd analysis arrays
+    (``crowd``: the pedestrian model's ``info()``, fetched here when not given)."""
     info: dict[str, Any] = {"time": float(world.steps[0] * world.dt)}
     if res is not None:
         info.update(
@@ -40,7 +41,8 @@ def robot_info(world: CrowdWorld, res: StepResult | None) -> dict[str, Any]:
             human_overlaps=int(res.human_overlaps[0]),
             robot_hit_obstacle=bool(res.robot_hit_obstacle[0]),
         )
-    info["crowd"] = {k: v[0].copy() for k, v in world.human_model.info().items()}
+    crowd = world.human_model.info() if crowd is None else crowd
+    info["crowd"] = {k: v[0].copy() for k, v in crowd.items()}
     return info
 
 

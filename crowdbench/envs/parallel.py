@@ -99,36 +99,39 @@ class CrowdParallelEnv(ParallelEnv):
             self._renderer.clear()
         obs = self._observations()
         infos = {a: {} for a in self.agents}
-        infos["robot"] = robot_info(self.world, None)
+        infos["robot"] = robot_info(self.world, None, self.world.human_model.info())
         return obs, infos
 
     def step(self, actions: dict[str, Any]):
         if "robot" not in actions:
             raise ValueError("actions must include 'robot' (pedestrians left out are driven by the pedestrian model)")
-        H = self.world.num_humans
-        human_actions = np.zeros((1, H, 2))
-        override = np.zeros((1, H), dtype=bool)
-        for agent, act in actions.items():
-            if agent == "robot" or act is None:
-                continue
-            if agent not in self.agents:
-                raise ValueError(f"action for {agent!r}, which is not a live agent; live agents: {self.agents}")
-            i = int(agent.split("_")[1])
-            human_actions[0, i] = np.asarray(act, dtype=np.float64).reshape(2)
-            override[0, i] = True
+        human_actions = override = None
+        if len(actions) > 1:
+            H = self.world.num_humans
+            human_actions, override = np.zeros((1, H, 2)), np.zeros((1, H), dtype=bool)
+            for agent, act in actions.items():
+                if agent == "robot" or act is None:
+                    continue
+                if agent not in self.agents:
+                    raise ValueError(f"action for {agent!r}, which is not a live agent; live agents: {self.agents}")
+                i = int(agent.split("_")[1])
+                human_actions[0, i] = np.asarray(act, dtype=np.float64).reshape(2)
+                override[0, i] = True
         res = self.world.step(np.asarray(actions["robot"], dtype=np.float64).reshape(1, 2), human_actions, override)
         self._cycles += 1
         robot_done = bool(res.terminated[0])
         trunc = bool(res.truncated[0]) or (self.max_cycles is not None and self._cycles >= self.max_cycles)
         obs = self._observations()
-        rewards = {a: 0.0 for a in self.agents}
+        agents = self.agents
+        rewards = dict.fromkeys(agents, 0.0)
         rewards["robot"] = float(res.reward[0])
-        terminations = {a: False for a in self.agents}
+        terminations = dict.fromkeys(agents, False)
         terminations["robot"] = robot_done
-        truncations = {a: trunc or robot_done for a in self.agents}
+        truncations = dict.fromkeys(agents, trunc or robot_done)
         truncations["robot"] = trunc and not robot_done
-        infos = self._human_infos()
-        infos["robot"] = robot_info(self.world, res)
+        crowd = self.world.human_model.info()
+        infos = self._human_infos(crowd)
+        infos["robot"] = robot_info(self.world, res, crowd)
         if self._renderer is not None:
             self._renderer.record(self.world)
         if robot_done or trunc:
@@ -136,21 +139,23 @@ class CrowdParallelEnv(ParallelEnv):
         return obs, rewards, terminations, truncations, infos
 
     def _observations(self) -> dict[str, dict[str, np.ndarray]]:
+        """Every live agent's observation: views into one batched array per field (``agents[1:]`` are
+        ``human_0 … human_{n-1}`` in order, so row ``i`` belongs to ``human_i``)."""
         obs = {"robot": {k: v[0] for k, v in self._obs_builder.build(self.world).items()}}
         if len(self.agents) > 1:
             h = human_observations(self.world, 0)
-            for agent in self.agents[1:]:
-                i = int(agent.split("_")[1])
-                obs[agent] = {k: v[i] for k, v in h.items()}
+            for agent, me, nb, mask in zip(self.agents[1:], h["self"], h["neighbors"], h["mask"], strict=False):
+                obs[agent] = {"self": me, "neighbors": nb, "mask": mask}
         return obs
 
-    def _human_infos(self) -> dict[str, dict[str, Any]]:
-        crowd = self.world.human_model.info()
-        infos: dict[str, dict[str, Any]] = {}
-        for agent in self.agents[1:]:
-            i = int(agent.split("_")[1])
-            infos[agent] = {k: v[0, i].item() for k, v in crowd.items()}
-        return infos
+    def _human_infos(self, crowd: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
+        """Per pedestrian: the model's analysis values (``crowd``: arrays ``(B, H)``) as Python scalars."""
+        if not crowd:
+            return {agent: {} for agent in self.agents[1:]}
+        keys = list(crowd)
+        columns = [crowd[k][0].tolist() for k in keys]
+        return {agent: dict(zip(keys, values, strict=True))
+                for agent, *values in zip(self.agents[1:], *columns, strict=False)}
 
     def state(self) -> np.ndarray:
         """Global state ``(A * 7,)``: per agent [px, py, vx, vy, gx, gy, r] (robot first; padding slots parked)."""

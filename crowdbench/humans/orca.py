@@ -14,8 +14,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from crowdbench.humans.base import CrowdState, HumanModel, preferred_velocity, register
-from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
+from crowdbench.humans.base import CrowdState, HumanModel, register
+from crowdbench.humans.orca_kernel import build_obstacles, orca_batch, orca_inputs
 from crowdbench.validate import check_fields
 
 
@@ -85,23 +85,26 @@ class ORCABase(HumanModel):
         self._rad = np.zeros((B, A))
         self._vmax = np.zeros((B, A))
         self._active = np.zeros((B, A), dtype=bool)
+        self._ignore = np.full((B, A), -1, dtype=np.int64)
+        self._seen, self._hidden = np.zeros((B, num_humans), dtype=bool), np.ones((B, num_humans), dtype=bool)
 
     def robot_ignored(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
-        """``(B, H)`` bool: pedestrians that leave the robot out of their neighbour set this step."""
-        return np.full(state.active.shape, not state.robot_visible)
+        """``(B, H)`` bool: pedestrians that leave the robot out of their neighbour set this step (read-only)."""
+        return self._hidden if not state.robot_visible else self._seen
 
     def step(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
+        """ORCA velocities ``(B, H, 2)`` [m/s]: two compiled calls (:func:`orca_inputs` fills the agent arrays —
+        :func:`~crowdbench.humans.preferred_velocity` toward each goal —, :func:`orca_batch` solves)."""
         pad = self.params.radius_pad + self.params.safety_space
-        self._pos[:, 0], self._pos[:, 1:] = state.robot_position, state.positions
-        self._vel[:, 0], self._vel[:, 1:] = state.robot_velocity, state.velocities
-        self._pref[:, 1:] = preferred_velocity(state.positions, state.goals, state.v_pref, state.time_step)
-        self._rad[:, 0], self._rad[:, 1:] = state.robot_radius + pad, state.radii + pad
-        self._vmax[:, 1:] = state.v_pref
-        self._active[:, 0], self._active[:, 1:] = True, state.active
-        ignore = np.where(self.robot_ignored(state, rngs), 0, -1)
-        ignore = np.concatenate([np.full((len(ignore), 1), -1), ignore], axis=1)
+        ignore_robot = np.asarray(self.robot_ignored(state, rngs), dtype=bool)
+        if ignore_robot.shape != state.active.shape:
+            ignore_robot = np.broadcast_to(ignore_robot, state.active.shape)
+        orca_inputs(state.robot_position, state.robot_velocity, state.robot_radius,
+                    state.positions, state.velocities, state.goals, state.radii, state.v_pref, state.active,
+                    ignore_robot, pad, state.time_step, self._pos, self._vel,
+                    self._pref, self._rad, self._vmax, self._active, self._ignore)
         orca_batch(self._pos, self._vel, self._pref, self._rad, self._vmax, self._nd, self._mn, self._th, self._tho,
-                   self._active, self._controlled, ignore, *self._obst, state.time_step, self._out)
+                   self._active, self._controlled, self._ignore, *self._obst, state.time_step, self._out)
         return self._out[:, 1:].copy()
 
 

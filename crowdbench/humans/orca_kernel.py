@@ -412,3 +412,35 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
             if fail < n:
                 _lp3(lp, ld, n, n_obst, fail, ms, res, pp, pd)
             out[b, i, 0], out[b, i, 1] = res[0], res[1]
+
+
+@nb.njit(cache=True)
+def orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active,
+                ignore_robot, pad, dt, pos, vel, pref, rad, vmax, act, ignore):  # pragma: no cover - numba
+    """Fill :func:`orca_batch`'s agent arrays ``[robot, pedestrians...]`` from a crowd state, in place.
+
+    Args (``B`` worlds of ``H`` pedestrians):
+        robot_pos, robot_vel: ``(B, 2)``. robot_radius: ``(B,)``. positions, velocities, goals: ``(B, H, 2)``.
+        radii, v_pref: ``(B, H)``. active, ignore_robot: ``(B, H)`` bool. pad: added to every radius [m].
+        dt: [s] (a goal closer than ``v_pref·dt`` is reached in one step, as ``humans.preferred_velocity``).
+        pos, vel, pref: Out ``(B, 1 + H, 2)``. rad, vmax: Out ``(B, 1 + H)``. act: Out bool. ignore: Out int
+            (0 = leave the robot out, -1 = nobody). Row 0 (the robot) gets position, velocity, radius, activity.
+
+    """
+    B, H = radii.shape
+    inv_dt = 1.0 / dt
+    for b in range(B):
+        pos[b, 0, 0], pos[b, 0, 1] = robot_pos[b, 0], robot_pos[b, 1]
+        vel[b, 0, 0], vel[b, 0, 1] = robot_vel[b, 0], robot_vel[b, 1]
+        rad[b, 0], act[b, 0], ignore[b, 0] = robot_radius[b] + pad, True, -1
+        for h in range(H):
+            px, py = positions[b, h, 0], positions[b, h, 1]
+            pos[b, h + 1, 0], pos[b, h + 1, 1] = px, py
+            vel[b, h + 1, 0], vel[b, h + 1, 1] = velocities[b, h, 0], velocities[b, h, 1]
+            dx, dy = goals[b, h, 0] - px, goals[b, h, 1] - py
+            dist = np.sqrt(dx * dx + dy * dy)
+            vp = v_pref[b, h]
+            scale = inv_dt if dist < vp * dt else vp / max(dist, 1e-12)
+            pref[b, h + 1, 0], pref[b, h + 1, 1] = dx * scale, dy * scale
+            rad[b, h + 1], vmax[b, h + 1], act[b, h + 1] = radii[b, h] + pad, vp, active[b, h]
+            ignore[b, h + 1] = 0 if ignore_robot[b, h] else -1

@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+import numba as nb
 import numpy as np
 
 from crowdbench.humans.base import CrowdState, register
@@ -99,20 +100,68 @@ class ResponsiveORCA(ORCABase):
         return in_view & (dist <= self.sensing_range) & state.active & state.robot_visible
 
     def robot_ignored(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
-        self.visible = self.robot_in_view(state)
+        """Advance the latent states one step (one compiled call, :func:`_latent_step`; :meth:`robot_in_view` and
+        :func:`latent_step_reference` are its numpy statement) and return ``(B, H)``: ξᵢ = 0 or robot invisible."""
         for b in np.flatnonzero(self._cursor >= self.BLOCK):
             self._u[b] = rngs[b].random((self.BLOCK, self.num_humans))
             self._cursor[b] = 0
-        u = self._u[np.arange(self.num_worlds), self._cursor]
-        self._cursor += 1
-        candidate = u < self.rho_i * self.visible
-        disagree = candidate != self.xi
-        self._streak = np.where(disagree, self._streak + 1, 0)
-        flip = (self._streak >= self.debounce) | self._fresh[:, None]
-        self.xi = np.where(flip, candidate, self.xi)
-        self._streak[flip] = 0
-        self._fresh[:] = False
-        return ~self.xi | (not state.robot_visible)
+        ignored = np.empty(self.xi.shape, dtype=bool)
+        _latent_step(state.robot_position, state.positions, state.headings, state.active, bool(state.robot_visible),
+                     self.fov, self.sensing_range, self._u, self._cursor, self.rho_i, self.xi, self._streak,
+                     self._fresh, self.debounce, self.visible, ignored)
+        return ignored
 
     def info(self) -> dict[str, np.ndarray]:
         return {"rho_i": self.rho_i.copy(), "robot_in_view": self.visible.copy(), "xi": self.xi.copy()}
+
+
+def latent_step_reference(model: ResponsiveORCA, state: CrowdState, u: np.ndarray) -> np.ndarray:
+    """Numpy statement of one latent step (the test oracle of :func:`_latent_step`), in place on ``model``'s
+    ``visible``, ``xi``, ``_streak``, ``_fresh``; ``u`` ``(B, H)`` are this step's uniforms. Returns ``ignored``."""
+    model.visible = model.robot_in_view(state)
+    candidate = u < model.rho_i * model.visible
+    disagree = candidate != model.xi
+    model._streak = np.where(disagree, model._streak + 1, 0)
+    flip = (model._streak >= model.debounce) | model._fresh[:, None]
+    model.xi = np.where(flip, candidate, model.xi)
+    model._streak[flip] = 0
+    model._fresh[:] = False
+    return ~model.xi | (not state.robot_visible)
+
+
+@nb.njit(cache=True)
+def _latent_step(robot_pos, positions, headings, active, robot_visible, fov, sensing_range, u, cursor, rho_i, xi,
+                 streak, fresh, debounce, visible, ignored):  # pragma: no cover - numba
+    """One step of every pedestrian's latent state, in place (see the module docstring): visibility Iᵢ,
+    candidate cᵢ ~ Bernoulli(ρᵢ·Iᵢ) from the pre-drawn uniforms ``u[b, cursor[b]]``, debounced switch of ξᵢ.
+
+    The view angle comes from libm's ``atan2``, which may differ from numpy's ``arctan2`` in the last bit; only
+    the comparison with the field of view uses it, so Iᵢ agrees with :meth:`ResponsiveORCA.robot_in_view` except
+    within ~1e-16 rad of the field's edge.
+    """
+    B, H = xi.shape
+    full = fov >= 2 * math.pi
+    half = 0.5 * fov + 1e-12
+    two_pi = 2 * np.pi
+    for b in range(B):
+        row = cursor[b]
+        for h in range(H):
+            rx, ry = robot_pos[b, 0] - positions[b, h, 0], robot_pos[b, 1] - positions[b, h, 1]
+            dist = np.sqrt(rx * rx + ry * ry)
+            in_view = True
+            if not full:
+                ang = math.atan2(ry, rx) - headings[b, h]
+                in_view = abs((ang + np.pi) % two_pi - np.pi) <= half
+            vis = in_view and dist <= sensing_range and active[b, h] and robot_visible
+            visible[b, h] = vis
+            cand = u[b, row, h] < (rho_i[b, h] if vis else 0.0)
+            if cand != xi[b, h]:
+                streak[b, h] += 1
+            else:
+                streak[b, h] = 0
+            if streak[b, h] >= debounce or fresh[b]:
+                xi[b, h] = cand
+                streak[b, h] = 0
+            ignored[b, h] = not xi[b, h] or not robot_visible
+        cursor[b] = row + 1
+        fresh[b] = False

@@ -19,8 +19,8 @@ import numpy as np
 from gymnasium import spaces
 
 from crowdbench.config import WorldConfig
-from crowdbench.geometry import norm
 from crowdbench.registry import Registry
+from crowdbench.worlds._kernels import human_observation, robot_observation
 
 BOUND = 1.0e5
 """Finite bound of the Box spaces [m or m/s] (parked padding slots sit at 1e4 m)."""
@@ -46,28 +46,15 @@ class Observation(ABC):
 OBSERVATIONS: Registry[Observation] = Registry("robot observation", "crowdbench.observations")
 
 
-def robot_vector(world) -> np.ndarray:
-    """``(B, 9)`` = [px, py, r, gx, gy, v_pref, θ, vx, vy] of the robot."""
-    return np.concatenate([world.pos[:, 0], world.radius[:, :1], world.goal[:, 0], world.v_pref[:, :1],
-                           world.heading[:, :1], world.vel[:, 0]], axis=1).astype(np.float32)
-
-
-def nearest(world, n_max: int, max_range: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Indices ``(B, n_max)`` of pedestrians (0-based, into ``pos[:, 1:]``) sorted by distance to the robot, the
-    relative positions ``(B, n_max, 2)`` and the validity mask ``(B, n_max)`` (within ``max_range``, active).
-    """
-    rel = world.pos[:, 1:] - world.pos[:, :1]
-    dist = norm(rel)
-    key = np.where(world.active[:, 1:] & (dist <= max_range), dist, np.inf)
-    B, H = key.shape
-    k = min(n_max, H)
-    order = np.zeros((B, n_max), dtype=np.int64)
-    valid = np.zeros((B, n_max), dtype=bool)
-    rel_sorted = np.zeros((B, n_max, 2))
-    order[:, :k] = np.argsort(key, axis=1, kind="stable")[:, :k]
-    valid[:, :k] = np.take_along_axis(key, order[:, :k], axis=1) < np.inf
-    rel_sorted[:, :k] = np.take_along_axis(rel, order[:, :k, None], axis=1) * valid[:, :k, None]
-    return order, rel_sorted, valid
+def _build(world, features: int, max_range: float, n_max: int) -> dict[str, np.ndarray]:
+    """Robot vector, nearest-first pedestrian features ``(B, n_max, features)`` and mask (one compiled kernel)."""
+    B = world.num_worlds
+    robot = np.empty((B, 9), np.float32)
+    humans = np.empty((B, n_max, features), np.float32)
+    mask = np.empty((B, n_max), np.float32)
+    robot_observation(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading, world.active,
+                      max_range, robot, humans, mask)
+    return {"robot": robot, "humans": humans, "mask": mask}
 
 
 def _robot_box() -> spaces.Box:
@@ -86,8 +73,7 @@ class RelativeObservation(Observation):
                             "mask": spaces.Box(0.0, 1.0, (n,), np.float32)})
 
     def build(self, world) -> dict[str, np.ndarray]:
-        _, rel, valid = nearest(world, self.config.max_humans_observed, self.config.sensing_range)
-        return {"robot": robot_vector(world), "humans": rel.astype(np.float32), "mask": valid.astype(np.float32)}
+        return _build(world, 2, self.config.sensing_range, self.config.max_humans_observed)
 
 
 @OBSERVATIONS.register("full_state")
@@ -102,11 +88,7 @@ class FullStateObservation(Observation):
                             "mask": spaces.Box(0.0, 1.0, (n,), np.float32)})
 
     def build(self, world) -> dict[str, np.ndarray]:
-        order, rel, valid = nearest(world, self.config.max_humans_observed, np.inf)
-        vel = np.take_along_axis(world.vel[:, 1:], order[..., None], axis=1)
-        rad = np.take_along_axis(world.radius[:, 1:], order, axis=1)
-        feats = np.concatenate([rel, vel, rad[..., None]], -1) * valid[..., None]
-        return {"robot": robot_vector(world), "humans": feats.astype(np.float32), "mask": valid.astype(np.float32)}
+        return _build(world, 5, np.inf, self.config.max_humans_observed)
 
 
 def human_observation_space(config: WorldConfig) -> spaces.Dict:
@@ -121,28 +103,13 @@ def human_observation_space(config: WorldConfig) -> spaces.Dict:
 
 
 def human_observations(world, b: int) -> dict[str, np.ndarray]:
-    """Observations of all pedestrian slots of world ``b``, vectorised: arrays ``(H, ...)``."""
+    """Observations of all pedestrian slots of world ``b`` (one compiled kernel): arrays ``(H, ...)``."""
     cfg = world.config
-    n = cfg.max_humans_observed
-    p, v, r = world.pos[b], world.vel[b], world.radius[b]
-    me = np.concatenate([p[1:], v[1:], world.goal[b, 1:], r[1:, None], world.v_pref[b, 1:, None],
-                         world.heading[b, 1:, None]], 1)
-    rel = p[None, :] - p[1:, None]  # (H, A, 2): agent j relative to pedestrian i
-    dist = norm(rel)
-    ok = world.active[b][None, :] & (dist <= cfg.human_sensing_range)
-    ok[np.arange(len(ok)), np.arange(1, len(ok) + 1)] = False  # not itself
-    if not cfg.robot_visible:
-        ok[:, 0] = False
-    key = np.where(ok, dist, np.inf)
-    k = min(n, key.shape[1])
-    order = np.argsort(key, axis=1, kind="stable")[:, :k]
-    valid = np.take_along_axis(key, order, axis=1) < np.inf
-    feats = np.concatenate([np.take_along_axis(rel, order[..., None], 1), v[order], r[order][..., None]], -1)
-    feats *= valid[..., None]
-    out_f = np.zeros((len(me), n, 5))
-    out_m = np.zeros((len(me), n))
-    out_f[:, :k], out_m[:, :k] = feats, valid
-    return {"self": me.astype(np.float32), "neighbors": out_f.astype(np.float32), "mask": out_m.astype(np.float32)}
+    H, n = world.num_humans, cfg.max_humans_observed
+    me, nb, mask = np.empty((H, 9), np.float32), np.empty((H, n, 5), np.float32), np.empty((H, n), np.float32)
+    human_observation(world.pos[b], world.vel[b], world.goal[b], world.radius[b], world.v_pref[b], world.heading[b],
+                      world.active[b], cfg.human_sensing_range, cfg.robot_visible, me, nb, mask)
+    return {"self": me, "neighbors": nb, "mask": mask}
 
 
 def make_observation(name: str, config: WorldConfig) -> Observation:

@@ -1,13 +1,17 @@
 """pymunk side of the world: one :class:`pymunk.Space` per world, agents as KINEMATIC circle bodies, obstacles as
-static segments/polygons, synchronised with the numpy state in one C call per world and direction.
+static segments/polygons — the world's geometry store, kept equal to the numpy state in one C call per world.
 
-The fast path drives the same C iterators that :mod:`pymunk.batch` uses (``pmSpaceBody{Set,Get}IteratorFuncBatched``)
-with float arrays that point straight into numpy memory, so a world step costs one velocity write, one
-``cpSpaceStep`` and one position read — no per-body Python. It reaches them through pymunk's private
-``pymunk._chipmunk`` module (verified on pymunk 7.3.1; pinned ``>=7.3,<8``). The public fallback does the same
-through :func:`pymunk.batch.set_space_bodies` / :func:`~pymunk.batch.get_space_bodies` and ``Space.step`` (a few µs
-more per world-step); it is used when the private module is missing, when :func:`use_fast_sync` turns the fast path
-off, or with ``CROWDBENCH_PURE_PYMUNK=1``. Both give identical positions (tested).
+The world's motion kernel integrates ``p ← p + v·dt`` itself — bit for bit what ``cpSpaceStep`` does to a kinematic
+body (tested) — and :meth:`PymunkWorlds.sync` then moves the bodies. Measured on one world of 5 pedestrians
+(``benchmarks/bench_pettingzoo.py``): stepping the spaces (velocity write, ``cpSpaceStep``, position read, copies)
+cost 3.8 µs per world-step, the position write alone 1.3 µs.
+
+The fast path drives the same C iterator that :mod:`pymunk.batch` uses (``pmSpaceBodySetIteratorFuncBatched``)
+with a float array that points straight into numpy memory — no per-body Python. It reaches it through pymunk's
+private ``pymunk._chipmunk`` module (verified on pymunk 7.3.1; pinned ``>=7.3,<8``). The public fallback does the
+same through :func:`pymunk.batch.set_space_bodies` (a few µs more per world); it is used when the private module is
+missing, when :func:`use_fast_sync` turns the fast path off, or with ``CROWDBENCH_PURE_PYMUNK=1``. Both give
+identical positions (tested).
 """
 
 from __future__ import annotations
@@ -56,18 +60,14 @@ class PymunkWorlds:
         self.spaces = [self._build(radii, obstacles) for _ in range(num_worlds)]
         B = num_worlds
         slack = 8  # rows of headroom so the C array never reallocates away from numpy memory
-        self._vel = np.zeros((B, A + slack, 2))
         self._pos = np.zeros((B, A + slack, 2))
         self.fast = bool(_FAST["enabled"])
         """Whether this batch synchronises through the private fast path."""
         if not self.fast:
             return
         self._keep: list = []
-        self._set_vel = [self._data(self._vel[b], pmb.BodyFields.VELOCITY) for b in range(B)]
         self._set_pos = [self._data(self._pos[b], pmb.BodyFields.POSITION) for b in range(B)]
-        self._get_pos = [self._data(self._pos[b], pmb.BodyFields.POSITION) for b in range(B)]
         self._set_fn = ffi.addressof(lib, "pmSpaceBodySetIteratorFuncBatched")
-        self._get_fn = ffi.addressof(lib, "pmSpaceBodyGetIteratorFuncBatched")
 
     @staticmethod
     def _build(radii: np.ndarray, obstacles: Sequence[Polygon]) -> pymunk.Space:
@@ -124,42 +124,25 @@ class PymunkWorlds:
             d.floatArray.num = 0
             lib.cpSpaceEachBody(self.spaces[b]._space, self._set_fn, d)
 
-    def step(self, velocities: np.ndarray, dt: float) -> np.ndarray:
-        """Give every agent its velocity ``(B, A, 2)`` [m/s], step every space by ``dt`` [s] and return the new
-        positions ``(B, A, 2)`` [m] (pymunk integrates ``p ← p + v·dt``).
-        """
+    def sync(self, positions: np.ndarray) -> None:
+        """Move every agent body to ``positions`` ``(B, A, 2)`` [m]: one C call per world (the world's motion
+        kernel integrates ``p ← p + v·dt`` itself, bit for bit what ``cpSpaceStep`` does to a kinematic body)."""
         A = self.num_agents
-        self._vel[:, :A] = velocities
+        self._pos[:, :A] = positions
         if not self.fast:
-            return self._step_public(dt)
-        set_fn, get_fn, step = self._set_fn, self._get_fn, lib.cpSpaceStep
-        for b, space in enumerate(self.spaces):
-            sp = space._space
-            d = self._set_vel[b]
+            for b, space in enumerate(self.spaces):
+                pmb.set_space_bodies(space, pmb.BodyFields.POSITION, self._buffer(self._pos[b]))
+            return
+        set_fn, each = self._set_fn, lib.cpSpaceEachBody
+        for space, d in zip(self.spaces, self._set_pos, strict=True):
             d.floatArray.num = 0
-            lib.cpSpaceEachBody(sp, set_fn, d)
-            step(sp, dt)
-            g = self._get_pos[b]
-            g.floatArray.num = 0
-            lib.cpSpaceEachBody(sp, get_fn, g)
-        return self._pos[:, :A].copy()
+            each(space._space, set_fn, d)
 
     @staticmethod
     def _buffer(rows: np.ndarray) -> pmb.Buffer:
         buf = pmb.Buffer()
         buf.set_float_buf(rows.reshape(-1))
         return buf
-
-    def _step_public(self, dt: float) -> np.ndarray:
-        """:meth:`step` through pymunk's public API only."""
-        A = self.num_agents
-        for b, space in enumerate(self.spaces):
-            pmb.set_space_bodies(space, pmb.BodyFields.VELOCITY, self._buffer(self._vel[b]))
-            space.step(dt)
-            out = pmb.Buffer()
-            pmb.get_space_bodies(space, pmb.BodyFields.POSITION, out)
-            self._pos[b, :A] = np.frombuffer(out.float_buf()).reshape(-1, 2)[:A]
-        return self._pos[:, :A].copy()
 
     def verify(self, world: int = 0) -> None:
         """Check the fast path against the public ``pymunk.batch`` API (raises ``RuntimeError`` on mismatch)."""
@@ -169,3 +152,4 @@ class PymunkWorlds:
         mine = np.array([tuple(b.position) for b in self.spaces[world].agent_bodies])
         if not (np.array_equal(public, mine) and np.array_equal(public, self._pos[world, : self.num_agents])):
             raise RuntimeError("pymunk fast synchronisation disagrees with pymunk.batch")
+

@@ -25,10 +25,12 @@ import numpy as np
 import pymunk
 
 from crowdbench.config import WorldConfig
-from crowdbench.geometry import norm, obstacle_edges, pair_overlaps, swept_pair_min_distance, swept_segment_fraction
+from crowdbench.geometry import norm, obstacle_edges
 from crowdbench.humans.base import CrowdState, HumanModel, PedestrianModelError, make
+from crowdbench.worlds._kernels import motion, outcome
 from crowdbench.worlds.layouts import Layout, make_layout
 from crowdbench.worlds.physics import PymunkWorlds
+from crowdbench.worlds.reference import clip_norm
 
 RUNNING, SUCCESS, COLLISION, TIMEOUT = 0, 1, 2, 3
 OUTCOMES = ("running", "success", "collision", "timeout")
@@ -122,6 +124,13 @@ class CrowdWorld:
         interval = self.layout.goal_change_interval
         self._change_every = round(interval / self.dt) if interval else 0  # steps between random goal changes
         self.human_model.bind(B, H, self.obstacles, self.dt)
+        rw = config.reward
+        self._rw = np.array([rw.success, rw.collision, rw.discomfort_dist, rw.discomfort_scale, rw.progress_scale,
+                             rw.time_penalty, rw.goal_tolerance])
+        self._unicycle = config.kinematics == "unicycle"
+        self._scratch = {"disp": np.zeros((B, A, 2)), "reached": np.zeros((B, H), dtype=bool),
+                         "moving": np.zeros((B, A), dtype=bool), "change_due": np.zeros(B, dtype=bool)}
+        self._state: CrowdState | None = None
         self.reset(seeds=list(range(B)))
         self.physics.verify()
 
@@ -145,7 +154,13 @@ class CrowdWorld:
 
     # ------------------------------------------------------------------ state views
     def crowd_state(self) -> CrowdState:
-        """The batched view handed to pedestrian models."""
+        """The batched view handed to pedestrian models: views of the world's arrays, which every step and reset
+        update in place (so the view is built once)."""
+        if self._state is None:
+            self._state = self._crowd_state()
+        return self._state
+
+    def _crowd_state(self) -> CrowdState:
         return CrowdState(
             positions=self.pos[:, 1:], velocities=self.vel[:, 1:], goals=self.goal[:, 1:], radii=self.radius[:, 1:],
             v_pref=self.v_pref[:, 1:], headings=self.heading[:, 1:], active=self.active[:, 1:],
@@ -238,7 +253,7 @@ class CrowdWorld:
         action = np.asarray(action, dtype=np.float64).reshape(self.num_worlds, 2)
         vp = self.v_pref[:, 0]
         if self.config.kinematics == "holonomic":
-            return _clip_norm(action, vp)
+            return clip_norm(action, vp)
         v = np.clip(action[:, 0], 0.0, vp)
         w = np.clip(action[:, 1], -self.config.max_angular_speed, self.config.max_angular_speed)
         self.heading[:, 0] = _wrap(self.heading[:, 0] + w * self.dt)
@@ -257,93 +272,71 @@ class CrowdWorld:
             human_actions: Optional ``(B, H, 2)`` velocities [m/s] for externally driven pedestrians.
             human_override: ``(B, H)`` bool: which pedestrians follow ``human_actions`` instead of the model.
 
+        The arithmetic runs in three compiled kernels (:mod:`crowdbench.worlds._kernels`, tested bit for bit
+        against the numpy of :mod:`crowdbench.worlds.reference`) around pymunk's integration.
         """
-        cfg, rw, dt = self.config, self.config.reward, self.dt
-        vel = np.empty_like(self.vel)
-        vel[:, 0] = self.robot_velocity(robot_action)
-        if self.num_humans:
-            state = self.crowd_state()
-            hv = self._human_velocities(state)
+        B = self.num_worlds
+        if self.num_humans:  # from the pre-step state
+            hv = self._human_velocities(self.crowd_state())
             if human_override is not None and human_override.any():
                 hv = np.where(human_override[..., None], human_actions, hv)
-            vel[:, 1:] = _clip_norm(hv, self.v_pref[:, 1:])
-        vel[~self.active] = 0.0
-        disp = vel * dt
+            self.vel[:, 1:] = hv
+        unicycle = self._unicycle
+        if unicycle:
+            self.vel[:, 0] = self.robot_velocity(robot_action)
+        else:  # the kernel clips it to v_pref
+            self.vel[:, 0] = np.asarray(robot_action, dtype=np.float64).reshape(B, 2)
+        scratch = self._scratch
+        robot_hit, d_min = np.empty(B, dtype=bool), np.empty(B)
+        if not motion(self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges, self.dt, 20,
+                      scratch["disp"], robot_hit, d_min, not unicycle):
+            raise self._non_finite(human_override)
+        self.physics.sync(self.pos)
 
-        robot_hit = np.zeros(self.num_worlds, dtype=bool)
-        if len(self.edges):
-            frac, hit = swept_segment_fraction(self.pos, disp, self.radius, self.edges)
-            frac[~self.active] = 1.0
-            disp *= frac[..., None]
-            vel = disp / dt
-            robot_hit = hit[:, 0]
-
-        # robot–pedestrian swept clearance (before moving: uses start positions and displacements)
-        if self.num_humans:
-            centre = swept_pair_min_distance(self.pos[:, 1:] - self.pos[:, :1], disp[:, 1:] - disp[:, :1])
-            surface = centre - self.radius[:, 1:] - self.radius[:, :1]
-            d_min = np.where(self.active[:, 1:], surface, np.inf).min(axis=1)
-        else:
-            d_min = np.full(self.num_worlds, np.inf)
-
-        # pymunk integrates the motion
-        self.pos = self.physics.step(vel, dt)
-        self.vel = vel
-        moving = np.einsum("bai,bai->ba", vel, vel) > 1e-12
-        if cfg.kinematics == "unicycle":
-            moving[:, 0] = False
-        self.heading = np.where(moving, np.arctan2(vel[..., 1], vel[..., 0]), self.heading)
-
-        # outcome and reward (the paper's piecewise main term, first matching case wins)
-        gdist = self.goal_distance()
-        success = gdist <= rw.goal_tolerance
-        collision = ((d_min <= 0.0) | robot_hit) & ~success
-        discomfort = ~success & ~collision & (d_min < rw.discomfort_dist)
-        progress = ~success & ~collision & ~discomfort
-        terms = {
-            "success": np.where(success, rw.success, 0.0),
-            "collision": np.where(collision, rw.collision, 0.0),
-            "discomfort": np.where(discomfort, rw.discomfort_scale * (d_min - rw.discomfort_dist), 0.0),
-            "progress": np.where(progress, rw.progress_scale * (self.prev_goal_dist - gdist), 0.0),
-            "time": np.full(self.num_worlds, rw.time_penalty),
-        }
-        reward = sum(terms.values())
-        self.prev_goal_dist = gdist
-        self.steps += 1
-        terminated = success | collision
-        truncated = ~terminated & (self.steps >= cfg.max_steps)
-        outcome = np.select([success, collision, truncated], [SUCCESS, COLLISION, TIMEOUT], RUNNING)
-
-        overlaps = pair_overlaps(self.pos[:, 1:], self.radius[:, 1:], self.active[:, 1:])
-        if self.num_humans:
-            self._renew_goals()
-            if self._change_every:
-                self._change_goals()
-        return StepResult(reward, terms, terminated, truncated, outcome, d_min, overlaps, robot_hit)
+        terms, reward = np.empty((len(REWARD_TERMS), B)), np.empty(B)
+        result, overlaps = np.empty(B, dtype=np.int64), np.empty(B, dtype=np.int64)
+        terminated, truncated = np.empty(B, dtype=bool), np.empty(B, dtype=bool)
+        reached, moving, change_due = scratch["reached"], scratch["moving"], scratch["change_due"]
+        events = outcome(self.pos, self.vel, self.goal, self.radius, self.active, moving, self.steps,
+                              self.prev_goal_dist, d_min, robot_hit, unicycle, self.config.max_steps, self._rw,
+                              self._change_every, terms, reward, result, terminated, truncated, overlaps, reached,
+                              change_due)
+        np.copyto(self.heading, np.arctan2(self.vel[..., 1], self.vel[..., 0]), where=moving)
+        if events & 1:
+            self._renew_goals(reached)
+        if events & 2:
+            self._change_goals(np.flatnonzero(change_due))
+        return StepResult(reward, dict(zip(REWARD_TERMS, terms, strict=True)), terminated, truncated, result, d_min,
+                          overlaps, robot_hit)
 
     def _human_velocities(self, state: CrowdState) -> np.ndarray:
         """The pedestrian model's velocities ``(B, H, 2)``; a model that raises or returns the wrong shape, NaN or
         inf is reported by name (:class:`~crowdbench.humans.base.PedestrianModelError`), not as a physics error."""
-        name = type(self.human_model).__name__
         try:
             hv = np.asarray(self.human_model.step(state, self.model_rngs), dtype=np.float64)
         except Exception as e:
+            name = type(self.human_model).__name__
             raise PedestrianModelError(f"pedestrian model {name} failed: {type(e).__name__}: {e}") from e
         if hv.shape != (self.num_worlds, self.num_humans, 2):
+            name = type(self.human_model).__name__
             raise PedestrianModelError(f"pedestrian model {name} returned velocities of shape {hv.shape}; expected "
                                        f"({self.num_worlds}, {self.num_humans}, 2)")
-        if not np.isfinite(hv[self.active[:, 1:]]).all():
-            raise PedestrianModelError(f"pedestrian model {name} returned NaN or inf velocities")
         return hv
 
-    def _renew_goals(self) -> None:
-        """Pedestrians within one radius of their goal get a new one by the layout's rule (vectorised over worlds;
-        the uniforms come from each world's own generator, one call per world that needs any)."""
-        hp, hg = self.pos[:, 1:], self.goal[:, 1:]
-        d = hg - hp
-        reached = self.active[:, 1:] & (d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] <= self.radius[:, 1:] ** 2)
-        if not reached.any():
-            return
+    def _non_finite(self, override: np.ndarray | None) -> Exception:
+        """The error for NaN or inf velocities of active pedestrians (found by the motion kernel before anything
+        moved): the pedestrian model's fault unless they came from ``human_actions``."""
+        bad = ~np.isfinite(self.vel[:, 1:]).all(axis=-1) & self.active[:, 1:]
+        if override is not None and (bad & override).any():
+            return ValueError("human_actions: NaN or inf velocities for externally driven pedestrians "
+                              f"{np.argwhere(bad & override).tolist()} (world, pedestrian)")
+        return PedestrianModelError(f"pedestrian model {type(self.human_model).__name__} returned NaN or inf "
+                                    "velocities")
+
+    def _renew_goals(self, reached: np.ndarray) -> None:
+        """Pedestrians within one radius of their goal (``reached`` ``(B, H)`` bool) get a new one by the layout's
+        rule (vectorised over worlds; the uniforms come from each world's own generator, one call per world that
+        needs any)."""
         bi, hi = np.nonzero(reached)  # sorted by world, then pedestrian
         if self.layout.respawn:
             self._respawn(bi, hi + 1)
@@ -378,10 +371,9 @@ class CrowdWorld:
                 self.pos[b, a], self.goal[b, a], self.vel[b, a] = s[k], g[k], 0.0
             self.physics.set_positions(np.array([b]), self.pos[b][None])
 
-    def _change_goals(self) -> None:
-        """Random goal changes: in worlds whose episode step is a multiple of the layout's interval, each active
+    def _change_goals(self, worlds: np.ndarray) -> None:
+        """Random goal changes in ``worlds`` (their episode step is a multiple of the layout's interval): each active
         pedestrian takes a new goal (:meth:`Layout.changed_goals`) with the layout's probability."""
-        worlds = np.flatnonzero(self.steps % self._change_every == 0)
         m, p = self.layout.renew_uniforms, self.layout.goal_change_prob
         for b in worlds:
             slots = np.flatnonzero(self.active[b, 1:]) + 1
@@ -390,12 +382,6 @@ class CrowdWorld:
             if len(change):
                 self.goal[b, change] = self.layout.changed_goals(u[u[:, 0] < p, 1:], self.pos[b, change],
                                                                  self.goal[b, change])
-
-
-def _clip_norm(v: np.ndarray, vmax: np.ndarray) -> np.ndarray:
-    """Scale vectors ``(..., 2)`` down to at most ``vmax`` ``(...)`` in norm."""
-    n = norm(v)
-    return v * np.minimum(1.0, vmax / np.maximum(n, 1e-12))[..., None]
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:

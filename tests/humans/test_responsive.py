@@ -9,6 +9,7 @@ import pytest
 
 from crowdbench.config import WorldConfig
 from crowdbench.humans import ResponsiveORCA
+from crowdbench.humans.responsive import latent_step_reference
 from crowdbench.worlds import CrowdWorld
 
 
@@ -76,8 +77,8 @@ def _direct_chain(rho, visible, K, T, seed=0):
     m.reset(np.arange(B), rngs, S)
     m.robot_in_view = lambda state: visible  # fixed visibility pattern
     share = np.zeros((B, H))
-    for _ in range(T):
-        m.robot_ignored(S, rngs)
+    for _ in range(T):  # the numpy statement of the latent step (the compiled one is tested equal to it)
+        latent_step_reference(m, S, np.stack([r.random(H) for r in rngs]))
         share += m.xi
     return share / T, m
 

@@ -1,0 +1,113 @@
+"""Plain numpy reference of the world's compiled kernels (:mod:`crowdbench.worlds._kernels`).
+
+Same signatures, same results bit for bit (``tests/worlds/test_kernels.py``). This is the readable statement of
+what a step does — broadcasts over ``(B, A)`` built on :mod:`crowdbench.geometry` — and the kernels' test oracle;
+the world itself runs the kernels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from crowdbench.geometry import norm, pair_overlaps, swept_pair_min_distance, swept_segment_fraction
+
+
+def clip_norm(v: np.ndarray, vmax: np.ndarray) -> np.ndarray:
+    """Scale vectors ``(..., 2)`` down to at most ``vmax`` ``(...)`` in norm."""
+    n = norm(v)
+    return v * np.minimum(1.0, vmax / np.maximum(n, 1e-12))[..., None]
+
+
+def motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot) -> bool:
+    """See :func:`crowdbench.worlds._kernels.motion`."""
+    if not np.isfinite(vel[:, 1:][active[:, 1:]]).all():
+        return False
+    if clip_robot:
+        vel[:, 0] = clip_norm(vel[:, 0], v_pref[:, 0])
+    vel[:, 1:] = clip_norm(vel[:, 1:], v_pref[:, 1:])
+    vel[~active] = 0.0
+    d = vel * dt
+    robot_hit[:] = False
+    if len(edges):
+        frac, hit = swept_segment_fraction(pos, d, radius, edges, iters)
+        frac[~active] = 1.0
+        d *= frac[..., None]
+        vel[:] = d / dt
+        robot_hit[:] = hit[:, 0]
+    disp[:] = d
+    centre = swept_pair_min_distance(pos[:, 1:] - pos[:, :1], d[:, 1:] - d[:, :1])
+    surface = centre - radius[:, 1:] - radius[:, :1]
+    d_min[:] = np.where(active[:, 1:], surface, np.inf).min(axis=1, initial=np.inf)
+    pos += vel * dt
+    return True
+
+
+def outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
+            max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
+            change_due) -> int:
+    """See :func:`crowdbench.worlds._kernels.outcome` (the paper's piecewise reward, first matching case wins)."""
+    moving[:] = np.einsum("bai,bai->ba", vel, vel) > 1e-12
+    if robot_turns:
+        moving[:, 0] = False
+    gdist = norm(goal[:, 0] - pos[:, 0])
+    success = gdist <= rw[6]
+    collision = ((d_min <= 0.0) | robot_hit) & ~success
+    discomfort = ~success & ~collision & (d_min < rw[2])
+    progress = ~success & ~collision & ~discomfort
+    terms[0] = np.where(success, rw[0], 0.0)
+    terms[1] = np.where(collision, rw[1], 0.0)
+    terms[2] = np.where(discomfort, rw[3] * (d_min - rw[2]), 0.0)
+    terms[3] = np.where(progress, rw[4] * (prev_goal_dist - gdist), 0.0)
+    terms[4] = rw[5]
+    reward[:] = (((terms[0] + terms[1]) + terms[2]) + terms[3]) + terms[4]
+    prev_goal_dist[:] = gdist
+    steps += 1
+    terminated[:] = success | collision
+    truncated[:] = ~terminated & (steps >= max_steps)
+    result[:] = np.select([success, collision, truncated], [1, 2, 3], 0)
+    change_due[:] = (steps % change_every == 0) if change_every > 0 else False
+    overlaps[:] = pair_overlaps(pos[:, 1:], radius[:, 1:], active[:, 1:])
+    d = goal[:, 1:] - pos[:, 1:]
+    reached[:] = active[:, 1:] & (d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] <= radius[:, 1:] * radius[:, 1:])
+    return int(reached.any()) | 2 * int(change_due.any())
+
+
+def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, robot, humans, mask) -> None:
+    """See :func:`crowdbench.worlds._kernels.robot_observation`."""
+    robot[:] = np.concatenate([pos[:, 0], radius[:, :1], goal[:, 0], v_pref[:, :1], heading[:, :1], vel[:, 0]], 1)
+    rel = pos[:, 1:] - pos[:, :1]
+    dist = norm(rel)
+    key = np.where(active[:, 1:] & (dist <= max_range), dist, np.inf)
+    B, H = key.shape
+    k = min(humans.shape[1], H)
+    order = np.zeros(mask.shape, dtype=np.int64)
+    order[:, :k] = np.argsort(key, axis=1, kind="stable")[:, :k]
+    valid = np.take_along_axis(key, order, axis=1) < np.inf
+    valid[:, k:] = False
+    feats = [np.take_along_axis(rel, order[..., None], axis=1)]
+    if humans.shape[2] == 5:
+        feats += [np.take_along_axis(vel[:, 1:], order[..., None], axis=1),
+                  np.take_along_axis(radius[:, 1:], order, axis=1)[..., None]]
+    humans[:] = np.where(valid[..., None], np.concatenate(feats, -1), 0.0)
+    mask[:] = valid
+
+
+def human_observation(pos, vel, goal, radius, v_pref, heading, active, sensing_range, robot_visible, me,
+                      neighbors, mask) -> None:
+    """See :func:`crowdbench.worlds._kernels.human_observation`."""
+    me[:] = np.concatenate([pos[1:], vel[1:], goal[1:], radius[1:, None], v_pref[1:, None], heading[1:, None]], 1)
+    rel = pos[None, :] - pos[1:, None]  # (H, A, 2): agent j relative to pedestrian i
+    dist = norm(rel)
+    ok = active[None, :] & (dist <= sensing_range)
+    ok[np.arange(len(ok)), np.arange(1, len(ok) + 1)] = False  # not itself
+    if not robot_visible:
+        ok[:, 0] = False
+    key = np.where(ok, dist, np.inf)
+    k = min(neighbors.shape[1], key.shape[1])
+    order = np.argsort(key, axis=1, kind="stable")[:, :k]
+    valid = np.take_along_axis(key, order, axis=1) < np.inf
+    feats = np.concatenate([np.take_along_axis(rel, order[..., None], 1), vel[order], radius[order][..., None]], -1)
+    neighbors[:] = 0.0
+    mask[:] = 0.0
+    neighbors[:, :k] = np.where(valid[..., None], feats, 0.0)
+    mask[:, :k] = valid
