@@ -5,6 +5,9 @@ Figures (medians of repeated runs, with the spread = max − min):
 * ``env_steps_per_s[N][batch]`` — circle crossing with latent-responsive ORCA pedestrians, world + pedestrian model
   + robot observation, constant robot action, one core; each repeat times 200 consecutive steps (one 50 s episode
   length, so the congested crossing phase and goal renewals are included, not just the cheap first steps);
+* ``pettingzoo_steps_per_s[N]`` — one world through ``crowdbench.parallel_env`` (ORCA pedestrians, every agent's
+  observation and info built, robot heading for its goal), one core, 3 × 2,000 ``env.step`` calls, with resets
+  ``excluded`` from and ``included`` in the timing (the issue-18 comparison with CrowdNav: README, "Speed");
 * ``orca_agent_steps_per_s[N]`` — the ORCA kernel alone, 64 worlds of N agents, one core;
 * ``train_steps_per_s`` — H²INT PPO training end to end (rollout + update), default configuration (both cores:
   two world processes that act and step, two threads in the update), 10 iterations from scratch after 2 warm-up
@@ -29,7 +32,10 @@ from typing import Any
 
 import numpy as np
 
-TARGETS = {"env_steps_per_s N=20 batch=64": 10_000, "orca_agent_steps_per_s N=20": 400_000,
+TARGETS = {"pettingzoo_steps_per_s N=5 (resets excluded)": 32_000,
+           "pettingzoo_steps_per_s N=10 (resets excluded)": 12_000,
+           "pettingzoo_steps_per_s N=20 (resets excluded)": 4_000,
+           "env_steps_per_s N=20 batch=64": 10_000, "orca_agent_steps_per_s N=20": 2_500_000,
            "train_steps_per_s": 5_000, "h2int_inference_ms": 1.0}
 
 
@@ -267,8 +273,14 @@ def decision_ms_all(repeats: int) -> dict[str, Any]:
 def run(quick: bool = False) -> dict[str, Any]:
     """All figures; ``quick`` uses fewer steps and repeats (for smoke tests and CI)."""
     rep = 3 if quick else 7
-    res: dict[str, Any] = {"machine": machine(), "quick": quick, "env_steps_per_s": {}, "orca_agent_steps_per_s": {}}
+    res: dict[str, Any] = {"machine": machine(), "quick": quick, "env_steps_per_s": {}, "orca_agent_steps_per_s": {},
+                           "pettingzoo_steps_per_s": {}}
     with one_core():
+        for n in (5, 10, 20):
+            steps = 100 if quick else 2000
+            res["pettingzoo_steps_per_s"][str(n)] = {
+                "excluded": pettingzoo_steps_per_s(n, steps, 3, resets=False),
+                "included": pettingzoo_steps_per_s(n, steps, 3, resets=True)}
         for n in (10, 20, 30, 50):
             res["env_steps_per_s"][str(n)] = {
                 "1": env_steps_per_s(n, 1, 20 if quick else 200, rep),
@@ -290,6 +302,10 @@ def results_markdown(res: dict[str, Any]) -> str:
              f"{m['logical_cores']} logical cores; Python {m['python']}, numpy {m['numpy']}, numba {m['numba']}, "
              f"pymunk {m['pymunk']}, torch {m['torch']}. Medians (spread = max − min); one core unless stated.", "",
              "| figure | N | batch | median | spread |", "|---|---|---|---|---|"]
+    for n, by_r in res.get("pettingzoo_steps_per_s", {}).items():
+        for resets, s in by_r.items():
+            lines.append(f"| pettingzoo_steps_per_s (one world, resets {resets}) | {n} | 1 | {s['median']:,.0f} | "
+                         f"{s['spread']:,.0f} |")
     for n, by_b in res["env_steps_per_s"].items():
         for b, s in by_b.items():
             lines.append(f"| env_steps_per_s | {n} | {b} | {s['median']:,.0f} | {s['spread']:,.0f} |")

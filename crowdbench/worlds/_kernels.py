@@ -292,3 +292,23 @@ def human_observation(pos, vel, goal, radius, v_pref, heading, active, sensing_r
             f = neighbors[i - 1, s]
             f[0], f[1] = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1]
             f[2], f[3], f[4] = vel[j, 0], vel[j, 1], radius[j]
+
+
+@nb.njit(cache=True)
+def first_clear(starts, pos, radius, active, agent, gap):  # pragma: no cover - numba
+    """Index of the first candidate start ``(m, 2)`` whose centre distance to every other active agent of the world
+    (``pos`` ``(A, 2)``, ``radius`` ``(A,)``, ``active`` ``(A,)``) is at least both radii + ``gap`` [m], where
+    ``agent`` is the one being placed; ``m - 1`` if none is (re-spawning pedestrians, ``CrowdWorld._respawn``)."""
+    m, A = starts.shape[0], radius.shape[0]
+    for k in range(m):
+        clear = True
+        for j in range(A):
+            if j == agent or not active[j]:
+                continue
+            dx, dy = starts[k, 0] - pos[j, 0], starts[k, 1] - pos[j, 1]
+            if not math.sqrt(dx * dx + dy * dy) >= radius[agent] + radius[j] + gap:
+                clear = False
+                break
+        if clear:
+            return k
+    return m - 1

@@ -96,11 +96,16 @@ class PymunkWorlds:
         space.agent_shapes = shapes
         return space
 
-    def set_radii(self, world: int, radii: np.ndarray) -> None:
-        """Give the agents of world ``world`` the radii ``(A,)`` [m] (episodes with drawn pedestrian sizes)."""
-        for shape, r in zip(self.spaces[world].agent_shapes, radii, strict=True):
+    def set_radii(self, world: int, radii: np.ndarray, slots: slice | int = slice(None)) -> None:
+        """Give the agents ``slots`` of world ``world`` their radii from ``radii`` ``(A,)`` [m] (episodes with drawn
+        pedestrian sizes)."""
+        shapes = self.spaces[world].agent_shapes
+        if isinstance(slots, (int, np.integer)):
+            shapes[slots].unsafe_set_radius(float(radii[slots]))
+            return
+        for shape, r in zip(shapes[slots], radii[slots].tolist(), strict=True):
             if shape.radius != r:
-                shape.unsafe_set_radius(float(r))
+                shape.unsafe_set_radius(r)
 
     def _data(self, rows: np.ndarray, field: pmb.BodyFields):
         fa = lib.pmFloatArrayNew(0)

@@ -80,16 +80,16 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
     key = np.where(active[:, 1:] & (dist <= max_range), dist, np.inf)
     B, H = key.shape
     k = min(humans.shape[1], H)
-    order = np.zeros(mask.shape, dtype=np.int64)
-    order[:, :k] = np.argsort(key, axis=1, kind="stable")[:, :k]
+    order = np.argsort(key, axis=1, kind="stable")[:, :k]
     valid = np.take_along_axis(key, order, axis=1) < np.inf
-    valid[:, k:] = False
     feats = [np.take_along_axis(rel, order[..., None], axis=1)]
     if humans.shape[2] == 5:
         feats += [np.take_along_axis(vel[:, 1:], order[..., None], axis=1),
                   np.take_along_axis(radius[:, 1:], order, axis=1)[..., None]]
-    humans[:] = np.where(valid[..., None], np.concatenate(feats, -1), 0.0)
-    mask[:] = valid
+    humans[:] = 0.0
+    mask[:] = 0.0
+    humans[:, :k] = np.where(valid[..., None], np.concatenate(feats, -1), 0.0)
+    mask[:, :k] = valid
 
 
 def human_observation(pos, vel, goal, radius, v_pref, heading, active, sensing_range, robot_visible, me,

@@ -27,7 +27,7 @@ import pymunk
 from crowdbench.config import WorldConfig
 from crowdbench.geometry import norm, obstacle_edges
 from crowdbench.humans.base import CrowdState, HumanModel, PedestrianModelError, make
-from crowdbench.worlds._kernels import motion, outcome
+from crowdbench.worlds._kernels import first_clear, motion, outcome
 from crowdbench.worlds.layouts import Layout, make_layout
 from crowdbench.worlds.physics import PymunkWorlds
 from crowdbench.worlds.reference import clip_norm
@@ -128,6 +128,7 @@ class CrowdWorld:
         self._rw = np.array([rw.success, rw.collision, rw.discomfort_dist, rw.discomfort_scale, rw.progress_scale,
                              rw.time_penalty, rw.goal_tolerance])
         self._unicycle = config.kinematics == "unicycle"
+        self._max_steps = config.max_steps
         self._scratch = {"disp": np.zeros((B, A, 2)), "reached": np.zeros((B, H), dtype=bool),
                          "moving": np.zeros((B, A), dtype=bool), "change_due": np.zeros(B, dtype=bool)}
         self._state: CrowdState | None = None
@@ -212,17 +213,18 @@ class CrowdWorld:
         self.physics.set_positions(idx, self.pos[idx])
         self.human_model.reset(idx, self.model_rngs, self.crowd_state())
 
-    def _draw_attributes(self, b: int, rng: np.random.Generator, slots: slice | np.ndarray) -> None:
-        """Per-pedestrian radius and preferred speed of world ``b``'s agents ``slots`` (drawn when the config gives
-        ranges: CrowdNav++'s randomised attributes; pymunk's shapes follow)."""
+    def _draw_attributes(self, b: int, rng: np.random.Generator, slots: slice | int) -> None:
+        """Per-pedestrian radius and preferred speed of world ``b``'s agents ``slots`` (a slice, or one agent index;
+        drawn when the config gives ranges: CrowdNav++'s randomised attributes; pymunk's shapes follow)."""
         cfg = self.config
+        rows = slice(slots, slots + 1) if isinstance(slots, (int, np.integer)) else slots
+        k = len(self.radius[b, rows])
         if cfg.human_radius_range is not None:
-            k = len(self.radius[b, slots])
-            self.radius[b, slots] = rng.uniform(*cfg.human_radius_range, k)
-            self.physics.set_radii(b, self.radius[b])
+            self.radius[b, rows] = rng.uniform(*cfg.human_radius_range, k)
+            self.physics.set_radii(b, self.radius[b], slots)
         if cfg.human_v_pref_range is not None:
-            v = rng.uniform(*cfg.human_v_pref_range, len(self.v_pref[b, slots]))
-            self.v_pref[b, slots] = v if cfg.human_speed_cap is None else np.minimum(v, cfg.human_speed_cap)
+            v = rng.uniform(*cfg.human_v_pref_range, k)
+            self.v_pref[b, rows] = v if cfg.human_speed_cap is None else np.minimum(v, cfg.human_speed_cap)
 
     def set_agents(self, world: int, positions: np.ndarray | None = None, velocities: np.ndarray | None = None,
                    goals: np.ndarray | None = None) -> None:
@@ -298,7 +300,7 @@ class CrowdWorld:
         terminated, truncated = np.empty(B, dtype=bool), np.empty(B, dtype=bool)
         reached, moving, change_due = scratch["reached"], scratch["moving"], scratch["change_due"]
         events = outcome(self.pos, self.vel, self.goal, self.radius, self.active, moving, self.steps,
-                              self.prev_goal_dist, d_min, robot_hit, unicycle, self.config.max_steps, self._rw,
+                              self.prev_goal_dist, d_min, robot_hit, unicycle, self._max_steps, self._rw,
                               self._change_every, terms, reward, result, terminated, truncated, overlaps, reached,
                               change_due)
         np.copyto(self.heading, np.arctan2(self.vel[..., 1], self.vel[..., 0]), where=moving)
@@ -357,17 +359,12 @@ class CrowdWorld:
         rest. The slot's pedestrian-model state (e.g. its responsiveness) carries over."""
         from crowdbench.worlds.layouts import PLACEMENT_GAP
 
-        for b in np.unique(bi):
+        for b in (bi[:1] if bi[0] == bi[-1] else np.unique(bi)):
             rng = self.rngs[b]
             for a in ai[bi == b]:
-                self._draw_attributes(b, rng, np.array([a]))
+                self._draw_attributes(b, rng, int(a))
                 s, g = self.layout.respawn_candidates(rng, 16)
-                others = self.active[b].copy()
-                others[a] = False
-                need = self.radius[b, a] + self.radius[b, others] + PLACEMENT_GAP
-                d = np.linalg.norm(s[:, None] - self.pos[b, others][None], axis=-1)
-                ok = np.flatnonzero((d >= need).all(axis=1))
-                k = ok[0] if len(ok) else len(s) - 1
+                k = first_clear(s, self.pos[b], self.radius[b], self.active[b], a, PLACEMENT_GAP)
                 self.pos[b, a], self.goal[b, a], self.vel[b, a] = s[k], g[k], 0.0
             self.physics.set_positions(np.array([b]), self.pos[b][None])
 
