@@ -236,9 +236,41 @@ def build_info(crowdnav_dir: Path) -> dict[str, Any]:
             "crowdnav_dir": str(crowdnav_dir)}
 
 
+def interleaved(n_env: tuple[int, ...], n_orca: tuple[int, ...], rounds: int, steps: int,
+                crowdnav_dir: Path) -> dict[str, Any]:
+    """CrowdNav and crowdbench (and RVO2 and crowdbench's ORCA kernel) measured alternately in this one process,
+    one run each per round, so that the machine's slow and fast minutes hit both alike; per-round ratios."""
+    from crowdbench.bench import orca_agent_steps_per_s, pettingzoo_steps_per_s
+
+    out: dict[str, Any] = {"env_steps_per_s": {}, "orca_agent_steps_per_s": {}}
+    for n in n_env:
+        for resets in (False, True):
+            peer, ours = [], []
+            for _ in range(rounds):
+                peer.append(crowdnav_steps_per_s(n, steps, 1, resets, crowdnav_dir)["median"])
+                ours.append(pettingzoo_steps_per_s(n, steps, 1, resets)["median"])
+            ratios = [o / c for o, c in zip(ours, peer, strict=True)]
+            out["env_steps_per_s"][f"{n} resets {'included' if resets else 'excluded'}"] = {
+                "crowdnav": _stats(peer), "crowdbench": _stats(ours), "ratio": _stats(ratios)}
+    for n in n_orca:
+        reps = 20 if n == 200 else 60
+        peer, ours = [], []
+        for _ in range(rounds):
+            peer.append(rvo2_agent_steps_per_s(n, 64, reps, 1)["median"])
+            ours.append(orca_agent_steps_per_s(n, 64, reps, 1)["median"])
+        ratios = [o / c for o, c in zip(ours, peer, strict=True)]
+        out["orca_agent_steps_per_s"][str(n)] = {"rvo2": _stats(peer), "crowdbench": _stats(ours),
+                                                 "ratio": _stats(ratios)}
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser()
     p.add_argument("--quick", action="store_true", help="fewer steps and repeats (smoke test)")
+    p.add_argument("--interleaved", type=int, default=0, metavar="ROUNDS",
+                   help="also alternate peer and crowdbench runs ROUNDS times in this process (needs crowdbench "
+                        "installed in the peer interpreter: pip install --no-deps -e . plus pettingzoo, gymnasium, "
+                        "pymunk, numba) and report per-round speed ratios")
     p.add_argument("--crowdnav", type=Path, default=Path("/tmp/rvo/CrowdNav"),
                    help="CrowdNav checkout (for crowd_nav/configs/env.config)")
     args = p.parse_args()
@@ -258,6 +290,8 @@ def main() -> None:
     for n in (20, 50, 200):
         res["rvo2_agent_steps_per_s"][str(n)] = rvo2_agent_steps_per_s(
             n, 64, (3 if quick else 20) if n == 200 else (10 if quick else 60), rep)
+    if args.interleaved:
+        res["interleaved"] = interleaved((5, 10, 20), (20, 50, 200), args.interleaved, steps, args.crowdnav)
     res["build"] = build_info(args.crowdnav)
     print(json.dumps(res, indent=2))
 

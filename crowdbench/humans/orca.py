@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdbench.humans.base import CrowdState, HumanModel, register
-from crowdbench.humans.orca_kernel import build_obstacles, orca_batch, orca_inputs
+from crowdbench.humans.orca_kernel import build_obstacles, orca_batch, orca_step
 from crowdbench.validate import check_fields
 
 
@@ -93,18 +93,16 @@ class ORCABase(HumanModel):
         return self._hidden if not state.robot_visible else self._seen
 
     def step(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
-        """ORCA velocities ``(B, H, 2)`` [m/s]: two compiled calls (:func:`orca_inputs` fills the agent arrays —
-        :func:`~crowdbench.humans.preferred_velocity` toward each goal —, :func:`orca_batch` solves)."""
+        """ORCA velocities ``(B, H, 2)`` [m/s] in one compiled call (:func:`orca_step`: ``orca_inputs`` fills the
+        agent arrays — :func:`~crowdbench.humans.preferred_velocity` toward each goal —, ``orca_batch`` solves)."""
         pad = self.params.radius_pad + self.params.safety_space
         ignore_robot = np.asarray(self.robot_ignored(state, rngs), dtype=bool)
         if ignore_robot.shape != state.active.shape:
             ignore_robot = np.broadcast_to(ignore_robot, state.active.shape)
-        orca_inputs(state.robot_position, state.robot_velocity, state.robot_radius,
-                    state.positions, state.velocities, state.goals, state.radii, state.v_pref, state.active,
-                    ignore_robot, pad, state.time_step, self._pos, self._vel,
-                    self._pref, self._rad, self._vmax, self._active, self._ignore)
-        orca_batch(self._pos, self._vel, self._pref, self._rad, self._vmax, self._nd, self._mn, self._th, self._tho,
-                   self._active, self._controlled, self._ignore, *self._obst, state.time_step, self._out)
+        orca_step(state.robot_position, state.robot_velocity, state.robot_radius, state.positions, state.velocities,
+                  state.goals, state.radii, state.v_pref, state.active, ignore_robot, pad, state.time_step, self._pos,
+                  self._vel, self._pref, self._rad, self._vmax, self._active, self._ignore, self._nd, self._mn,
+                  self._th, self._tho, self._controlled, *self._obst, self._out)
         return self._out[:, 1:].copy()
 
 

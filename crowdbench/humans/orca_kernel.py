@@ -444,3 +444,14 @@ def orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals
             pref[b, h + 1, 0], pref[b, h + 1, 1] = dx * scale, dy * scale
             rad[b, h + 1], vmax[b, h + 1], act[b, h + 1] = radii[b, h] + pad, vp, active[b, h]
             ignore[b, h + 1] = 0 if ignore_robot[b, h] else -1
+
+
+@nb.njit(cache=True)
+def orca_step(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active, ignore_robot,
+              pad, dt, pos, vel, pref, rad, vmax, act, ignore, neighbor_dist, max_neighbors, time_horizon,
+              time_horizon_obst, controlled, opoint, onext, oprev, odir, oconvex, out):  # pragma: no cover - numba
+    """:func:`orca_inputs` then :func:`orca_batch` in one compiled call (the pedestrian model's step)."""
+    orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active, ignore_robot,
+                pad, dt, pos, vel, pref, rad, vmax, act, ignore)
+    orca_batch(pos, vel, pref, rad, vmax, neighbor_dist, max_neighbors, time_horizon, time_horizon_obst, act,
+               controlled, ignore, opoint, onext, oprev, odir, oconvex, dt, out)

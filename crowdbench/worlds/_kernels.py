@@ -4,6 +4,7 @@ Private below :class:`~crowdbench.worlds.world.CrowdWorld` and the observation b
 same floating-point operations, in the same order, as the plain numpy reference it replaces, and is tested equal to
 it bit for bit (``tests/worlds/test_kernels.py``):
 
+* :func:`advance` = :func:`motion` then :func:`outcome` (one dispatch per step);
 * :func:`motion` — pedestrian speed clipping, continuous collision against static edges, robot–pedestrian swept
   clearance (reference: ``crowdbench.worlds.reference.motion``, built on :mod:`crowdbench.geometry`);
 * :func:`outcome` — headings, goal distance, the paper's reward terms, episode outcome, pedestrian overlaps, goal
@@ -196,6 +197,19 @@ def outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min
                 events |= 1
     overlaps[:] = pair_overlaps(pos[:, 1:], radius[:, 1:], active[:, 1:])
     return events
+
+
+@nb.njit(cache=True)
+def advance(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot, goal, moving,
+            steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, terms, reward, result, terminated,
+            truncated, overlaps, reached, change_due):  # pragma: no cover - numba
+    """:func:`motion` then :func:`outcome` in one compiled call (a world step's arithmetic). Returns -1 when
+    :func:`motion` refused non-finite velocities (nothing moved), else :func:`outcome`'s event bits."""
+    if not motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot):
+        return -1
+    return outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
+                   max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
+                   change_due)
 
 
 @nb.njit(cache=True, inline="always")

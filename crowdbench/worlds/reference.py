@@ -72,6 +72,17 @@ def outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min
     return int(reached.any()) | 2 * int(change_due.any())
 
 
+def advance(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot, goal, moving,
+            steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, terms, reward, result, terminated,
+            truncated, overlaps, reached, change_due) -> int:
+    """See :func:`crowdbench.worlds._kernels.advance`."""
+    if not motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot):
+        return -1
+    return outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
+                   max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
+                   change_due)
+
+
 def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, robot, humans, mask) -> None:
     """See :func:`crowdbench.worlds._kernels.robot_observation`."""
     robot[:] = np.concatenate([pos[:, 0], radius[:, :1], goal[:, 0], v_pref[:, :1], heading[:, :1], vel[:, 0]], 1)

@@ -6,12 +6,14 @@ nothing of PettingZoo, Gymnasium or rsl-rl: the environments in :mod:`crowdbench
 Physics scheme (see README, "Physics"):
 
 * Each world owns a :class:`pymunk.Space` holding the static obstacles (segments, polygons) and one KINEMATIC
-  circle body per agent. pymunk integrates the motion (``p ← p + v·dt``) and answers spatial queries
-  (:meth:`CrowdWorld.space`). Bodies are synchronised through ``pymunk.batch`` in one call per world, never per agent.
+  circle body per agent, kept at the agents' positions (spatial queries: :meth:`CrowdWorld.space`). The step's
+  arithmetic runs in compiled kernels (:mod:`crowdbench.worlds._kernels`, tested bit for bit against
+  :mod:`crowdbench.worlds.reference`); the motion kernel integrates ``p ← p + v·dt``, exactly what ``cpSpaceStep``
+  does to a kinematic body, and the bodies follow in one ``pymunk.batch`` call per world, never per agent.
 * Collisions follow CrowdNav's semantics — *detected, not resolved*: agents are velocity-controlled and do not push
   each other. The robot collides when its disc touches a pedestrian's or an obstacle's at any time within the step
   (swept test, closest approach of the two linear motions); pedestrian–pedestrian overlaps are counted in the info.
-* Nothing passes through an obstacle: before pymunk integrates, every agent's displacement is cut at its time of
+* Nothing passes through an obstacle: before anything moves, every agent's displacement is cut at its time of
   impact with the static edges (vectorised continuous collision detection), so a disc stops at contact. This avoids
   the dynamic-body pitfall where velocity control lets discs tunnel at dt = 0.25 s.
 """
@@ -27,7 +29,7 @@ import pymunk
 from crowdbench.config import WorldConfig
 from crowdbench.geometry import norm, obstacle_edges
 from crowdbench.humans.base import CrowdState, HumanModel, PedestrianModelError, make
-from crowdbench.worlds._kernels import first_clear, motion, outcome
+from crowdbench.worlds._kernels import advance, first_clear
 from crowdbench.worlds.layouts import Layout, make_layout
 from crowdbench.worlds.physics import PymunkWorlds
 from crowdbench.worlds.reference import clip_norm
@@ -274,8 +276,9 @@ class CrowdWorld:
             human_actions: Optional ``(B, H, 2)`` velocities [m/s] for externally driven pedestrians.
             human_override: ``(B, H)`` bool: which pedestrians follow ``human_actions`` instead of the model.
 
-        The arithmetic runs in three compiled kernels (:mod:`crowdbench.worlds._kernels`, tested bit for bit
-        against the numpy of :mod:`crowdbench.worlds.reference`) around pymunk's integration.
+        The pedestrian model runs first (its own kernels), then the step's arithmetic in one compiled call
+        (:func:`crowdbench.worlds._kernels.advance`, tested bit for bit against the numpy of
+        :mod:`crowdbench.worlds.reference`); pymunk's bodies follow in one call per world.
         """
         B = self.num_worlds
         if self.num_humans:  # from the pre-step state
@@ -290,19 +293,17 @@ class CrowdWorld:
             self.vel[:, 0] = np.asarray(robot_action, dtype=np.float64).reshape(B, 2)
         scratch = self._scratch
         robot_hit, d_min = np.empty(B, dtype=bool), np.empty(B)
-        if not motion(self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges, self.dt, 20,
-                      scratch["disp"], robot_hit, d_min, not unicycle):
-            raise self._non_finite(human_override)
-        self.physics.sync(self.pos)
-
         terms, reward = np.empty((len(REWARD_TERMS), B)), np.empty(B)
         result, overlaps = np.empty(B, dtype=np.int64), np.empty(B, dtype=np.int64)
         terminated, truncated = np.empty(B, dtype=bool), np.empty(B, dtype=bool)
         reached, moving, change_due = scratch["reached"], scratch["moving"], scratch["change_due"]
-        events = outcome(self.pos, self.vel, self.goal, self.radius, self.active, moving, self.steps,
-                              self.prev_goal_dist, d_min, robot_hit, unicycle, self._max_steps, self._rw,
-                              self._change_every, terms, reward, result, terminated, truncated, overlaps, reached,
-                              change_due)
+        events = advance(self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges, self.dt, 20,
+                         scratch["disp"], robot_hit, d_min, not unicycle, self.goal, moving, self.steps,
+                         self.prev_goal_dist, unicycle, self._max_steps, self._rw, self._change_every, terms, reward,
+                         result, terminated, truncated, overlaps, reached, change_due)
+        if events < 0:
+            raise self._non_finite(human_override)
+        self.physics.sync(self.pos)
         np.copyto(self.heading, np.arctan2(self.vel[..., 1], self.vel[..., 0]), where=moving)
         if events & 1:
             self._renew_goals(reached)

@@ -227,8 +227,7 @@ def test_world_through_kernels_equals_world_through_reference(layout, config, mo
     import crowdbench.robots.observations as observations
     import crowdbench.worlds.world as world
 
-    monkeypatch.setattr(world, "motion", reference.motion)
-    monkeypatch.setattr(world, "outcome", reference.outcome)
+    monkeypatch.setattr(world, "advance", reference.advance)
     monkeypatch.setattr(observations, "robot_observation", reference.robot_observation)
     monkeypatch.setattr(observations, "human_observation", reference.human_observation)
     slow = _rollout(layout, **config)
