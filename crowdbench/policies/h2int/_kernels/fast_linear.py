@@ -95,7 +95,8 @@ class _Linear(torch.autograd.Function):
 def linear(x: torch.Tensor, w: torch.Tensor, b: torch.Tensor | None = None) -> torch.Tensor:
     """``F.linear(x, w, b)`` for float32 ``x`` ``(T, in)``, ``w`` ``(out, in)``, ``b`` ``(out,)`` → ``(T, out)``;
     differentiable. Other ranks or dtypes go to ``F.linear``."""
-    if x.dim() != 2 or x.dtype != torch.float32 or x.shape[0] < ROWS_QUANTUM or not onednn_active():
+    if (x.dim() != 2 or x.dtype != torch.float32 or x.shape[0] < ROWS_QUANTUM or not w.is_contiguous()
+            or not onednn_active()):  # a strided weight costs oneDNN ≈ 190 ms per call
         return F.linear(x, w, b)
     if torch.is_grad_enabled() and (x.requires_grad or w.requires_grad or (b is not None and b.requires_grad)):
         return _Linear.apply(x, w, b)
