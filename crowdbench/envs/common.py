@@ -32,15 +32,11 @@ def robot_action_space(config: WorldConfig) -> spaces.Box:
 def robot_info(world: CrowdWorld, res: StepResult | None, crowd: dict[str, np.ndarray] | None = None) -> dict[str, Any]:
     """The robot's info dict for world 0: outcome, named reward terms, clearance, overlaps, crowd analysis arrays
     (``crowd``: the pedestrian model's ``info()``, fetched here when not given)."""
-    info: dict[str, Any] = {"time": float(world.steps[0] * world.dt)}
+    info: dict[str, Any] = {"time": world.steps.item(0) * world.dt}
     if res is not None:
-        info.update(
-            outcome=OUTCOMES[int(res.outcome[0])],
-            reward_terms={k: float(v[0]) for k, v in res.terms.items()},
-            d_min=float(res.d_min[0]),
-            human_overlaps=int(res.human_overlaps[0]),
-            robot_hit_obstacle=bool(res.robot_hit_obstacle[0]),
-        )
+        info.update(outcome=OUTCOMES[res.outcome.item(0)],
+                    reward_terms={k: v.item(0) for k, v in res.terms.items()}, d_min=res.d_min.item(0),
+                    human_overlaps=res.human_overlaps.item(0), robot_hit_obstacle=res.robot_hit_obstacle.item(0))
     crowd = world.human_model.info() if crowd is None else crowd
     info["crowd"] = {k: v[0].copy() for k, v in crowd.items()}
     return info

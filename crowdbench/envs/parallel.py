@@ -117,7 +117,7 @@ class CrowdParallelEnv(ParallelEnv):
                 i = int(agent.split("_")[1])
                 human_actions[0, i] = np.asarray(act, dtype=np.float64).reshape(2)
                 override[0, i] = True
-        res = self.world.step(np.asarray(actions["robot"], dtype=np.float64).reshape(1, 2), human_actions, override)
+        res = self.world.step(actions["robot"], human_actions, override)
         self._cycles += 1
         robot_done = bool(res.terminated[0])
         trunc = bool(res.truncated[0]) or (self.max_cycles is not None and self._cycles >= self.max_cycles)

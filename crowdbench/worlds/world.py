@@ -292,10 +292,10 @@ class CrowdWorld:
         else:  # the kernel clips it to v_pref
             self.vel[:, 0] = np.asarray(robot_action, dtype=np.float64).reshape(B, 2)
         scratch = self._scratch
-        robot_hit, d_min = np.empty(B, dtype=bool), np.empty(B)
-        terms, reward = np.empty((len(REWARD_TERMS), B)), np.empty(B)
-        result, overlaps = np.empty(B, dtype=np.int64), np.empty(B, dtype=np.int64)
-        terminated, truncated = np.empty(B, dtype=bool), np.empty(B, dtype=bool)
+        floats, ints, flags = np.empty((7, B)), np.empty((2, B), dtype=np.int64), np.empty((3, B), dtype=bool)
+        terms, reward, d_min = floats[:5], floats[5], floats[6]  # the result's arrays: rows of three blocks
+        result, overlaps = ints
+        robot_hit, terminated, truncated = flags
         reached, moving, change_due = scratch["reached"], scratch["moving"], scratch["change_due"]
         events = advance(self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges, self.dt, 20,
                          scratch["disp"], robot_hit, d_min, not unicycle, self.goal, moving, self.steps,
