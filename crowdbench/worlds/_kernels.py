@@ -6,11 +6,13 @@ it bit for bit (``tests/worlds/test_kernels.py``):
 
 * :func:`advance` = :func:`motion` then :func:`outcome` (one dispatch per step);
 * :func:`motion` — pedestrian speed clipping, continuous collision against static edges, robot–pedestrian swept
-  clearance (reference: ``crowdbench.worlds.reference.motion``, built on :mod:`crowdbench.geometry`);
-* :func:`outcome` — headings, goal distance, the paper's reward terms, episode outcome, pedestrian overlaps, goal
-  arrivals (reference: ``reference.outcome``);
+  clearance, integration (reference: ``crowdbench.worlds.reference.motion``, built on :mod:`crowdbench.geometry`);
+* :func:`outcome` — which agents turn, goal distance, the paper's reward terms, episode outcome, pedestrian
+  overlaps, goal arrivals (reference: ``reference.outcome``);
 * :func:`robot_observation` / :func:`human_observation` — nearest-first observation arrays in float32
-  (reference: ``reference.robot_observation`` / ``reference.human_observation``).
+  (reference: ``reference.robot_observation`` / ``reference.human_observation``);
+* :func:`first_clear` — the first re-spawn candidate clear of everyone (reference: the numpy it replaced, checked
+  through whole-world rollouts).
 
 Why compiled: a world step of a small crowd is a few hundred numpy calls on arrays of a handful of elements, so
 per-call overhead (≈ 1 µs each) dominated; each kernel here costs one dispatch (≈ 1–3 µs) plus its arithmetic.
