@@ -11,8 +11,7 @@ it bit for bit (``tests/worlds/test_kernels.py``):
   overlaps, goal arrivals (reference: ``reference.outcome``);
 * :func:`robot_observation` / :func:`human_observation` — nearest-first observation arrays in float32
   (reference: ``reference.robot_observation`` / ``reference.human_observation``);
-* :func:`first_clear` — the first re-spawn candidate clear of everyone (reference: the numpy it replaced, checked
-  through whole-world rollouts).
+* :func:`first_clear` — the first re-spawn candidate clear of everyone (reference: ``reference.first_clear``).
 
 Why compiled: a world step of a small crowd is a few hundred numpy calls on arrays of a handful of elements, so
 per-call overhead (≈ 1 µs each) dominated; each kernel here costs one dispatch (≈ 1–3 µs) plus its arithmetic.

@@ -122,3 +122,13 @@ def human_observation(pos, vel, goal, radius, v_pref, heading, active, sensing_r
     mask[:] = 0.0
     neighbors[:, :k] = np.where(valid[..., None], feats, 0.0)
     mask[:, :k] = valid
+
+
+def first_clear(starts, pos, radius, active, agent, gap) -> int:
+    """See :func:`crowdbench.worlds._kernels.first_clear`."""
+    others = active.copy()
+    others[agent] = False
+    need = radius[agent] + radius[others] + gap
+    d = np.linalg.norm(starts[:, None] - pos[others][None], axis=-1)
+    ok = np.flatnonzero((d >= need).all(axis=1))
+    return int(ok[0]) if len(ok) else len(starts) - 1

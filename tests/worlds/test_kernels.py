@@ -152,6 +152,17 @@ def test_human_observation_kernel_equals_reference(visible, slots, seed):
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("seed", range(20))
+def test_first_clear_kernel_equals_reference(seed):
+    rng = np.random.default_rng(seed)
+    A = int(rng.integers(1, 25))
+    pos, _, _, radius, _, active = (x[0] for x in _scene(rng, 1, A, spread=3.0 if seed % 2 else 0.8))
+    starts = rng.uniform(-3.5, 3.5, (16, 2)) * (1.0 if seed % 2 else 0.3)  # odd: room; even: often nowhere (→ 15)
+    agent = int(rng.integers(0, A))
+    assert _kernels.first_clear(starts, pos, radius, active, agent, 0.1) == reference.first_clear(
+        starts, pos, radius, active, agent, 0.1)
+
+
 def test_orca_inputs_kernel_equals_numpy():
     rng = np.random.default_rng(0)
     B, H = 3, 9
