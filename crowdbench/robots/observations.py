@@ -46,14 +46,15 @@ class Observation(ABC):
 OBSERVATIONS: Registry[Observation] = Registry("robot observation", "crowdbench.observations")
 
 
-def _build(world, features: int, max_range: float, n_max: int) -> dict[str, np.ndarray]:
-    """Robot vector, nearest-first pedestrian features ``(B, n_max, features)`` and mask (one compiled kernel)."""
+def _build(world, features: int, max_range: float, n_max: int, by_id: bool = False) -> dict[str, np.ndarray]:
+    """Robot vector, pedestrian features ``(B, n_max, features)`` (nearest first, or slot ``j`` = pedestrian ``j``
+    with ``by_id``) and mask (one compiled kernel)."""
     B = world.num_worlds
     robot = np.empty((B, 9), np.float32)
     humans = np.empty((B, n_max, features), np.float32)
     mask = np.empty((B, n_max), np.float32)
     robot_observation(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading, world.active,
-                      max_range, robot, humans, mask)
+                      max_range, by_id, robot, humans, mask)
     return {"robot": robot, "humans": humans, "mask": mask}
 
 
@@ -74,6 +75,18 @@ class RelativeObservation(Observation):
 
     def build(self, world) -> dict[str, np.ndarray]:
         return _build(world, 2, self.config.sensing_range, self.config.max_humans_observed)
+
+
+@OBSERVATIONS.register("relative_by_id")
+class RelativeByIdObservation(RelativeObservation):
+    """The paper's observation with pedestrians in slot order instead of nearest first: ``humans[j]`` is pedestrian
+    ``j``'s (Δx, Δy), zero with ``mask[j] = 0`` while it is outside ``sensing_range`` or absent. For recurrent
+    policies that keep a state per pedestrian (DS-RNN's spatial-edge GRUs follow one person each)."""
+
+    name = "relative_by_id"
+
+    def build(self, world) -> dict[str, np.ndarray]:
+        return _build(world, 2, self.config.sensing_range, self.config.max_humans_observed, by_id=True)
 
 
 @OBSERVATIONS.register("full_state")

@@ -230,16 +230,17 @@ def _insert(dist, idx, count, cap, d, j):  # pragma: no cover - numba
 
 
 @nb.njit(cache=True)
-def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, robot, humans,
+def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, by_id, robot, humans,
                       mask):  # pragma: no cover - numba
     """The robot's observation arrays, nearest pedestrian first, in place.
 
     Args (``B`` worlds of ``A`` agents, ``n`` observed slots):
         pos, vel, goal: ``(B, A, 2)``. radius, v_pref, heading: ``(B, A)``. active: ``(B, A)`` bool.
         max_range: Pedestrians whose centre is farther [m] are left out (``inf``: none).
+        by_id: Slot ``j`` holds pedestrian ``j`` (zero and masked when left out) instead of the nearest-first order.
         robot: Out ``(B, 9)`` float32 = [px, py, r, gx, gy, v_pref, θ, vx, vy].
-        humans: Out ``(B, n, F)`` float32: F = 2 (Δx, Δy) or 5 (Δx, Δy, vx, vy, r), nearest first (ties by index),
-            zero-padded.
+        humans: Out ``(B, n, F)`` float32: F = 2 (Δx, Δy) or 5 (Δx, Δy, vx, vy, r), nearest first (ties by index)
+            or by pedestrian index, zero-padded.
         mask: Out ``(B, n)`` float32: 1 for real entries.
 
     """
@@ -252,16 +253,20 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
         robot[b, 3], robot[b, 4], robot[b, 5] = goal[b, 0, 0], goal[b, 0, 1], v_pref[b, 0]
         robot[b, 6], robot[b, 7], robot[b, 8] = heading[b, 0], vel[b, 0, 0], vel[b, 0, 1]
         count = 0
-        if n > 0:
-            for h in range(1, A):
-                dx, dy = pos[b, h, 0] - pos[b, 0, 0], pos[b, h, 1] - pos[b, 0, 1]
-                d = math.sqrt(dx * dx + dy * dy)
-                if active[b, h] and d <= max_range:
+        for h in range(1, A):
+            dx, dy = pos[b, h, 0] - pos[b, 0, 0], pos[b, h, 1] - pos[b, 0, 1]
+            d = math.sqrt(dx * dx + dy * dy)
+            if active[b, h] and d <= max_range:
+                if by_id:
+                    if h <= n:
+                        idx[count], count = h, count + 1
+                elif n > 0:
                     count = _insert(dist, idx, count, n, d, h)
         humans[b] = 0.0
         mask[b] = 0.0
-        for j in range(count):
-            h = idx[j]
+        for k in range(count):
+            h = idx[k]
+            j = h - 1 if by_id else k
             mask[b, j] = 1.0
             humans[b, j, 0] = pos[b, h, 0] - pos[b, 0, 0]
             humans[b, j, 1] = pos[b, h, 1] - pos[b, 0, 1]

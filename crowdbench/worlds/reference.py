@@ -83,7 +83,8 @@ def advance(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit,
                    change_due)
 
 
-def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, robot, humans, mask) -> None:
+def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, by_id, robot, humans,
+                      mask) -> None:
     """See :func:`crowdbench.worlds._kernels.robot_observation`."""
     robot[:] = np.concatenate([pos[:, 0], radius[:, :1], goal[:, 0], v_pref[:, :1], heading[:, :1], vel[:, 0]], 1)
     rel = pos[:, 1:] - pos[:, :1]
@@ -91,7 +92,7 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
     key = np.where(active[:, 1:] & (dist <= max_range), dist, np.inf)
     B, H = key.shape
     k = min(humans.shape[1], H)
-    order = np.argsort(key, axis=1, kind="stable")[:, :k]
+    order = np.broadcast_to(np.arange(k), (B, k)) if by_id else np.argsort(key, axis=1, kind="stable")[:, :k]
     valid = np.take_along_axis(key, order, axis=1) < np.inf
     feats = [np.take_along_axis(rel, order[..., None], axis=1)]
     if humans.shape[2] == 5:

@@ -126,6 +126,28 @@ def test_full_state_observation():
     assert ((h[:4, 4] >= 0.3) & (h[:4, 4] <= 0.5)).all()
 
 
+def test_relative_by_id_observation_keeps_each_pedestrian_in_its_slot():
+    """Slot j is pedestrian j at every step: its relative position while within 5 m, zero and masked otherwise —
+    and the same entries as the nearest-first observation, permuted."""
+    env = crowdbench.parallel_env(num_humans=12, observation="relative_by_id")
+    sorted_obs = crowdbench.robots.make_observation("relative", env.config)
+    obs, _ = env.reset(seed=3)
+    seen = set()
+    for _ in range(40):
+        w = env.world
+        rel = w.pos[0, 1:13] - w.pos[0, 0]
+        inside = np.linalg.norm(rel, axis=1) <= 5.0
+        o = obs["robot"]
+        np.testing.assert_array_equal(o["mask"][:12], inside.astype(np.float32))
+        np.testing.assert_allclose(o["humans"][:12][inside], rel[inside], atol=1e-5)
+        assert not o["humans"][:12][~inside].any() and not o["mask"][12:].any()
+        s = sorted_obs.build(w)
+        assert sorted(map(tuple, o["humans"][o["mask"] > 0])) == sorted(map(tuple, s["humans"][0][s["mask"][0] > 0]))
+        seen |= set(np.flatnonzero(inside))
+        obs, *_ = env.step({"robot": np.array([0.0, 0.0])})
+    assert len(seen) >= 3  # several people came into view
+
+
 def test_unknown_option_and_render_mode_errors():
     with pytest.raises(TypeError, match="unknown world option"):
         crowdbench.parallel_env(num_humen=3)

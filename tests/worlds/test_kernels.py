@@ -118,8 +118,9 @@ def test_outcome_kernel_equals_reference(seed):
 
 @pytest.mark.parametrize("features,max_range", [(2, 5.0), (5, np.inf), (2, 0.0)])
 @pytest.mark.parametrize("slots", [3, 30])
+@pytest.mark.parametrize("by_id", [False, True])
 @pytest.mark.parametrize("seed", range(4))
-def test_robot_observation_kernel_equals_reference(features, max_range, slots, seed):
+def test_robot_observation_kernel_equals_reference(features, max_range, slots, by_id, seed):
     rng = np.random.default_rng(seed)
     B, A = int(rng.integers(1, 5)), int(rng.integers(1, 12))
     pos, vel, goal, radius, v_pref, active = _scene(rng, B, A)
@@ -128,7 +129,7 @@ def test_robot_observation_kernel_equals_reference(features, max_range, slots, s
     for fn in (_kernels.robot_observation, reference.robot_observation):
         arrays = (np.empty((B, 9), np.float32), np.empty((B, slots, features), np.float32),
                   np.empty((B, slots), np.float32))
-        fn(pos, vel, goal, radius, v_pref, heading, active, max_range, *arrays)
+        fn(pos, vel, goal, radius, v_pref, heading, active, max_range, by_id, *arrays)
         out.append(arrays)
     for a, b in zip(*out, strict=True):
         np.testing.assert_array_equal(a, b)
