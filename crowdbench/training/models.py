@@ -12,7 +12,8 @@ keeps actor and critic as two modules, each with its own ``get_latent``; here:
 
 A new PPO method subclasses :class:`RecurrentTrunkActor` (implements :meth:`~RecurrentTrunkActor.encode_samples`,
 sets :attr:`~RecurrentTrunkActor.obs_keys`) and trains through :mod:`crowdbench.training` unchanged; a method whose
-recurrence is not "encoder, then one GRU" overrides :meth:`~RecurrentTrunkActor.trunk` too.
+recurrence is not "encoder, then one GRU" returns its own recurrent module from
+:meth:`~RecurrentTrunkActor.make_rnn` (DS-RNN: :mod:`crowdbench.policies.dsrnn.model`).
 """
 
 from __future__ import annotations
@@ -48,8 +49,14 @@ class RecurrentTrunkActor(MLPModel):
         self.latent_dim = gru_hidden
         self.z_dim = z_dim
         super().__init__(obs, obs_groups, obs_set, output_dim, hidden_dims, activation, False, distribution_cfg)
-        self.rnn = RNN(z_dim, gru_hidden, 1, "gru")
+        self.rnn = self.make_rnn(z_dim, gru_hidden)
         self._cache: tuple[Any, torch.Tensor] | None = None
+
+    def make_rnn(self, z_dim: int, latent: int) -> nn.Module:
+        """The recurrence from the encoder output ``z_dim`` to the latent: one GRU (``rsl_rl.modules.RNN``); a
+        method with another recurrence returns a module with the same interface (``forward(z, masks,
+        hidden_state)``, ``reset``, ``hidden_state``, ``detach_hidden_state``)."""
+        return RNN(z_dim, latent, 1, "gru")
 
     @abstractmethod
     def encode_samples(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:

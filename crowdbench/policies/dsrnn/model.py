@@ -1,0 +1,179 @@
+"""DS-RNN (Liu et al. 2021, "Decentralized Structural-RNN for Robot Crowd Navigation with Deep Reinforcement
+Learning"), as in Shuijing725/CrowdNav_DSRNN @91fb53c ``pytorchBaselines/a2c_ppo_acktr/srnn_model.py``.
+
+The crowd is a graph whose edges carry their own recurrent state:
+
+* **temporal edge** (the robot's own motion): its velocity → Linear(2→64)+ReLU → GRU(64→256);
+* **spatial edges** (one per pedestrian slot): the pedestrian's position relative to the robot → Linear(2→64)+ReLU
+  → GRU(64→256), weights shared by all slots, one hidden state per slot — so a slot must hold the same person from
+  step to step: the policy reads the ``relative_by_id`` observation (slot j = pedestrian j, masked while outside the
+  5 m sensing range);
+* **attention**: Linear(256→64) on the temporal state (query) and on each spatial state (keys), dot products scaled
+  by ``slots / √64`` (the original's ``num_edges / √attention_size``), softmax over the slots in view (none in view:
+  nothing attended), the weighted sum of the spatial states;
+* **node**: robot [p_x, p_y, r, g_x, g_y, v_pref, θ] → Linear(7→3) → Linear(3→64)+ReLU, the edges
+  [temporal ‖ attended] → Linear(512→64)+ReLU, both into GRU(128→128) → Linear(128→256) = the latent the actor and
+  critic heads (256→256→256, tanh) read.
+
+:class:`DSRNNCore` keeps all of it as one flat recurrent state per world, ``256 + slots·256 + 128`` values, behind
+the interface of ``rsl_rl.modules.RNN`` (rollout steps with an internal state; padded trajectories from stored
+initial states in the update), so :class:`DSRNNActor` trains through :mod:`crowdbench.training` like H²INT.
+Invisible slots keep stepping their GRU on a zero input (their observation entry is zero), as the original's
+padded humans do; only the attention ignores them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import torch
+from rsl_rl.utils import unpad_trajectories
+from tensordict import TensorDict
+from torch import nn
+
+from crowdbench.training.models import RecurrentTrunkActor
+
+ROBOT_NODE = 7
+"""Robot node features: the first 7 of the robot vector [p_x, p_y, r, g_x, g_y, v_pref, θ]."""
+
+
+@dataclass(frozen=True)
+class DSRNNConfig:
+    """DS-RNN's architecture (the original's sizes)."""
+
+    edge_embed: int = 64
+    """Edge input embedding width [-]."""
+    edge_rnn: int = 256
+    """Temporal and spatial edge GRU state size [-]."""
+    attention: int = 64
+    """Attention projection width [-]."""
+    robot_dims: tuple[int, ...] = (3, 64)
+    """Robot node embedding 7 → … (ReLU after the last) [-]."""
+    edge_out: int = 64
+    """Width of the edge features [temporal ‖ attended] → … (ReLU) [-]."""
+    node_rnn: int = 128
+    """Node GRU state size [-]."""
+    latent: int = 256
+    """Node output width (the latent the heads read) [-]."""
+    head_dims: tuple[int, ...] = (256, 256)
+    """Hidden widths of the actor and critic heads (tanh) [-]."""
+    action_std: float = 1.0
+    """Initial standard deviation of the Gaussian policy (learned, state-independent; log-std 0) [m/s]."""
+
+    def actor_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :class:`DSRNNActor` (and rsl-rl's ``actor`` config)."""
+        return {"config": self, "hidden_dims": list(self.head_dims), "activation": "tanh",
+                "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": self.action_std,
+                                     "learn_std": True}}
+
+
+class DSRNNCore(nn.Module):
+    """DS-RNN's recurrence behind ``rsl_rl.modules.RNN``'s interface (see the module docstring).
+
+    Input per step: the flat observation ``(n, 9 + 3·slots)`` = robot vector (9) ‖ relative positions
+    ``(slots, 2)`` flattened ‖ mask ``(slots,)``. Output: the latent ``(n, latent)``; state ``(1, n, state_dim)``.
+    """
+
+    def __init__(self, cfg: DSRNNConfig, slots: int) -> None:
+        super().__init__()
+        self.cfg, self.slots = cfg, slots
+        E, R, N = cfg.edge_embed, cfg.edge_rnn, cfg.node_rnn
+        self.temporal_embed = nn.Sequential(nn.Linear(2, E), nn.ReLU())
+        self.spatial_embed = nn.Sequential(nn.Linear(2, E), nn.ReLU())
+        self.temporal_rnn = nn.GRUCell(E, R)
+        self.spatial_rnn = nn.GRUCell(E, R)
+        self.query = nn.Linear(R, cfg.attention)
+        self.key = nn.Linear(R, cfg.attention)
+        dims = (ROBOT_NODE, *cfg.robot_dims)
+        layers: list[nn.Module] = [nn.Linear(a, b) for a, b in zip(dims[:-1], dims[1:], strict=True)]
+        self.robot_embed = nn.Sequential(*layers, nn.ReLU())
+        self.edge_features = nn.Sequential(nn.Linear(2 * R, cfg.edge_out), nn.ReLU())
+        self.node_rnn = nn.GRUCell(cfg.robot_dims[-1] + cfg.edge_out, N)
+        self.node_out = nn.Linear(N, cfg.latent)
+        self.state_dim = R + slots * R + N
+        self.hidden_state: torch.Tensor | None = None
+
+    def cell(self, x: torch.Tensor, h: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """One step: observations ``(n, 9 + 3·slots)``, states ``(n, state_dim)`` → latents ``(n, latent)``, new
+        states."""
+        n, K, R = x.shape[0], self.slots, self.cfg.edge_rnn
+        robot, rel, mask = x[:, :9], x[:, 9:9 + 2 * K].reshape(n, K, 2), x[:, 9 + 2 * K:] > 0.5
+        ht, hs, hn = h[:, :R], h[:, R:R + K * R].reshape(n * K, R), h[:, R + K * R:]
+        ht = self.temporal_rnn(self.temporal_embed(robot[:, 7:9]), ht)
+        hs = self.spatial_rnn(self.spatial_embed(rel.reshape(n * K, 2)), hs).reshape(n, K, R)
+        score = (self.key(hs) @ self.query(ht).unsqueeze(-1)).squeeze(-1) * (K / math.sqrt(self.cfg.attention))
+        weights = torch.softmax(score.masked_fill(~mask, -torch.inf), dim=-1)
+        weights = torch.where(mask.any(-1, keepdim=True), weights, 0.0)  # nobody in view: nothing attended
+        attended = (weights.unsqueeze(-1) * hs).sum(1)
+        edges = self.edge_features(torch.cat([ht, attended], -1))
+        hn = self.node_rnn(torch.cat([self.robot_embed(robot[:, :ROBOT_NODE]), edges], -1), hn)
+        return self.node_out(hn), torch.cat([ht, hs.reshape(n, K * R), hn], -1)
+
+    def forward(self, x: torch.Tensor, masks: torch.Tensor | None = None,
+                hidden_state: torch.Tensor | None = None) -> torch.Tensor:
+        """Rollout: ``x`` ``(n, ·)`` → ``(1, n, latent)`` from the internal state. Update: padded trajectories
+        ``x`` ``(T, B, ·)`` with ``masks`` ``(T, B)`` from ``hidden_state`` ``(1, B, state_dim)`` → the valid steps
+        ``(T, n_valid, latent)`` (``rsl_rl.utils.unpad_trajectories``)."""
+        if masks is None:
+            h = self.hidden_state[0] if self.hidden_state is not None else x.new_zeros(x.shape[0], self.state_dim)
+            out, h = self.cell(x, h)
+            self.hidden_state = h.unsqueeze(0)
+            return out.unsqueeze(0)
+        if hidden_state is None:
+            raise ValueError("DSRNNCore: the update needs the stored initial hidden states")
+        h, outs = hidden_state[0], []
+        for t in range(x.shape[0]):
+            out, h = self.cell(x[t], h)
+            outs.append(out)
+        return unpad_trajectories(torch.stack(outs), masks)
+
+    def reset(self, dones: torch.Tensor | None = None, hidden_state: torch.Tensor | None = None) -> None:
+        """As ``rsl_rl.modules.RNN.reset``: all states (to ``hidden_state`` or none) or zero those of ``dones``."""
+        if dones is None:
+            self.hidden_state = hidden_state
+        elif self.hidden_state is not None:
+            if hidden_state is not None:
+                raise NotImplementedError("resetting done worlds to a given hidden state")
+            self.hidden_state[..., dones == 1, :] = 0.0
+
+    def detach_hidden_state(self, dones: torch.Tensor | None = None) -> None:
+        if self.hidden_state is not None:
+            if dones is None:
+                self.hidden_state = self.hidden_state.detach()
+            else:
+                self.hidden_state[..., dones == 1, :] = self.hidden_state[..., dones == 1, :].detach()
+
+
+class DSRNNActor(RecurrentTrunkActor):
+    """rsl-rl actor: DS-RNN's graph recurrence → tanh MLP head → Gaussian mean (learned state-independent std).
+
+    Observation groups (``relative_by_id``): ``robot`` ``(·, 9)``, ``humans`` ``(·, N_max, 2)`` with slot j =
+    pedestrian j, ``mask`` ``(·, N_max)``.
+    """
+
+    obs_keys = ("robot", "humans", "mask")
+
+    def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int,
+                 config: DSRNNConfig | None = None, hidden_dims: tuple[int, ...] | list[int] = (256, 256),
+                 activation: str = "tanh", distribution_cfg: dict | None = None) -> None:
+        self.dsrnn = config = config or DSRNNConfig()
+        self.slots = obs["humans"].shape[-2]
+        super().__init__(obs, obs_groups, obs_set, output_dim, 9 + 3 * self.slots, config.latent, hidden_dims,
+                         activation, distribution_cfg)
+
+    def make_rnn(self, z_dim: int, latent: int) -> nn.Module:
+        return DSRNNCore(self.dsrnn, self.slots)
+
+    def encode_samples(self, obs):
+        """The flat per-step input of :class:`DSRNNCore`: robot ‖ positions ‖ mask ``(n, 9 + 3·slots)``."""
+        n = obs["robot"].shape[0]
+        return torch.cat([obs["robot"], obs["humans"].reshape(n, -1), obs["mask"]], -1)
+
+
+def build_actor(model: DSRNNConfig, n_max: int) -> DSRNNActor:
+    """An untrained actor of architecture ``model`` for ``n_max`` observation slots."""
+    obs = TensorDict({"robot": torch.zeros(1, 9), "humans": torch.zeros(1, n_max, 2), "mask": torch.zeros(1, n_max)},
+                     batch_size=[1])
+    return DSRNNActor(obs, {"actor": ["robot"], "critic": ["robot"]}, "actor", 2, **model.actor_kwargs())

@@ -1,0 +1,98 @@
+"""DS-RNN's recurrence: rollout steps and the update's padded trajectories agree, the attention sees only the slots in
+view and no slot order, done worlds restart from zero, and the actor runs through rsl-rl's interface."""
+
+from __future__ import annotations
+
+import torch
+from rsl_rl.utils import split_and_pad_trajectories
+from tensordict import TensorDict
+
+from crowdbench.policies.dsrnn.model import DSRNNConfig, DSRNNCore, build_actor
+
+K = 6
+
+
+def _obs(n: int, g: torch.Generator, visible: float = 0.6) -> torch.Tensor:
+    robot = torch.randn(n, 9, generator=g)
+    mask = (torch.rand(n, K, generator=g) < visible).float()
+    rel = torch.randn(n, K, 2, generator=g) * 3 * mask.unsqueeze(-1)
+    return torch.cat([robot, rel.reshape(n, -1), mask], -1)
+
+
+def _core() -> DSRNNCore:
+    torch.manual_seed(0)
+    return DSRNNCore(DSRNNConfig(), K)
+
+
+def test_rollout_steps_and_padded_trajectories_agree():
+    core, g = _core(), torch.Generator().manual_seed(1)
+    T, n = 7, 4
+    xs = torch.stack([_obs(n, g) for _ in range(T)])  # (T, n, ·)
+    dones = torch.zeros(T, n)
+    dones[2, 1] = dones[4, 3] = 1.0  # episodes end in worlds 1 and 3
+    outs, states = [], []
+    with torch.no_grad():
+        for t in range(T):
+            states.append(core.hidden_state if core.hidden_state is not None else torch.zeros(1, n, core.state_dim))
+            outs.append(core(xs[t])[0])
+            core.reset(dones[t])
+        stepped = torch.stack(outs)
+        # the update: trajectories split at dones, padded, each from its stored initial state
+        padded, masks = split_and_pad_trajectories(xs, dones.unsqueeze(-1).bool())
+        starts = torch.zeros(T, n, dtype=torch.bool)
+        starts[0], starts[1:] = True, dones[:-1].bool()
+        h_all = torch.stack(states)[:, 0]  # (T, n, S): the state before each step, as rsl-rl stores it
+        init = h_all.transpose(0, 1)[starts.T].unsqueeze(0)  # one initial state per trajectory, world-major order
+        batched = core(padded, masks, init)
+    torch.testing.assert_close(batched, stepped, rtol=1e-5, atol=1e-6)
+
+
+def test_attention_ignores_slots_out_of_view_and_slot_order():
+    core, g = _core(), torch.Generator().manual_seed(2)
+    n = 5
+    x = _obs(n, g)
+    h = torch.randn(n, core.state_dim, generator=g)
+    with torch.no_grad():
+        out, _ = core.cell(x, h)
+        # what a slot out of view holds (input and state) does not matter now
+        hidden = x[:, 9 + 2 * K:] < 0.5
+        x2, h2 = x.clone(), h.clone()
+        rel = x2[:, 9:9 + 2 * K].view(n, K, 2)
+        rel[hidden] = 7.0
+        hs = h2[:, 256:256 + K * 256].view(n, K, 256)
+        hs[hidden] = 1.0
+        torch.testing.assert_close(core.cell(x2, h2)[0], out)
+        # permuting the slots (with their states) changes nothing: attention has no slot order
+        perm = torch.randperm(K, generator=g)
+        x3, h3 = x.clone(), h.clone()
+        x3[:, 9:9 + 2 * K] = x[:, 9:9 + 2 * K].view(n, K, 2)[:, perm].reshape(n, -1)
+        x3[:, 9 + 2 * K:] = x[:, 9 + 2 * K:][:, perm]
+        h3[:, 256:256 + K * 256] = h[:, 256:256 + K * 256].view(n, K, 256)[:, perm].reshape(n, -1)
+        torch.testing.assert_close(core.cell(x3, h3)[0], out, rtol=1e-5, atol=1e-6)
+        # nobody in view: a finite latent, no NaN from an empty softmax
+        assert torch.isfinite(core.cell(_obs(n, g, visible=0.0), h)[0]).all()
+
+
+def test_done_worlds_restart_from_zero_state():
+    core, g = _core(), torch.Generator().manual_seed(3)
+    with torch.no_grad():
+        core(_obs(3, g))
+        core(_obs(3, g))
+        core.reset(torch.tensor([0.0, 1.0, 0.0]))
+        assert not core.hidden_state[0, 1].any() and core.hidden_state[0, 0].abs().sum() > 0
+        fresh = _core()
+        x = _obs(3, g)
+        torch.testing.assert_close(core(x)[0, 1], fresh(x)[0, 1])
+
+
+def test_actor_through_rsl_rl_interface():
+    actor = build_actor(DSRNNConfig(), K)
+    g = torch.Generator().manual_seed(4)
+    x = _obs(8, g)
+    obs = TensorDict({"robot": x[:, :9], "humans": x[:, 9:9 + 2 * K].view(8, K, 2), "mask": x[:, 9 + 2 * K:]},
+                     batch_size=[8])
+    with torch.no_grad():
+        a = actor(obs)
+    assert a.shape == (8, 2) and torch.isfinite(a).all()
+    assert actor.get_hidden_state().shape == (1, 8, actor.rnn.state_dim)
+    assert actor.rnn.state_dim == 256 + K * 256 + 128
