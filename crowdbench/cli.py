@@ -76,7 +76,7 @@ def _policy(args: argparse.Namespace, config=None):
     return make_policy(name or "orca", config, **({"checkpoint": args.checkpoint} if args.checkpoint else {}))
 
 
-CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl")
+CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl", "dsrnn")
 """Registered policies known to take ``checkpoint=`` (listed in errors; any policy with the argument accepts it)."""
 
 
@@ -130,11 +130,13 @@ def train_cmd(args: argparse.Namespace) -> int:
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
         model = {"variant": args.variant} if args.variant is not None else None
-        overrides = {"method": args.algo, "model": model, "seed": args.seed, "anneal": not args.no_anneal, **speed}
+        overrides = {"model": model, "seed": args.seed, **speed}
+        if args.no_anneal:
+            overrides["anneal"] = False
         for name in ("envs", "epochs", "mini_batches"):
             if getattr(args, name) is not None:
                 overrides["num_envs" if name == "envs" else name] = getattr(args, name)
-        cfg = TrainConfig(**overrides)
+        cfg = TrainConfig.for_method(args.algo, **overrides)
         out = args.out or os.path.join("runs", f"{method.label(cfg.model)}-seed{cfg.seed}")
     print(f"training {cfg.method} ({method.label(cfg.model)}) seed={cfg.seed} → {out}")
     trainer = train(cfg, out, resume=args.resume)

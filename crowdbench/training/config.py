@@ -44,7 +44,9 @@ class TrainConfig:
     window: int = 200
     """Episodes in the curriculum's success window (and its cooldown)."""
     learning_rate: float = 3e-4
-    """Initial Adam learning rate (then adapted to the KL target)."""
+    """Initial Adam learning rate (then adapted to the KL target with ``schedule="adaptive"``)."""
+    schedule: str = "adaptive"
+    """Learning-rate schedule: ``adaptive`` (rsl-rl's KL-target rule) or ``fixed``."""
     epochs: int = 4
     """PPO epochs per iteration."""
     mini_batches: int = 4
@@ -112,6 +114,8 @@ class TrainConfig:
         for name in ("learning_rate", "reward_scale", "clip", "max_grad_norm", "desired_kl"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name}={getattr(self, name)}; valid choices: a positive number")
+        if self.schedule not in ("adaptive", "fixed"):
+            raise ValueError(f"schedule={self.schedule!r}; valid choices: adaptive, fixed")
         if self.minutes < 0:
             raise ValueError(f"minutes={self.minutes}; valid choices: ≥ 0 (0 = no wall-clock budget)")
         if self.until_success and not self.eval_every:
@@ -121,6 +125,15 @@ class TrainConfig:
         if self.num_envs % self.mini_batches:
             raise ValueError(f"num_envs={self.num_envs} must be divisible by mini_batches={self.mini_batches} "
                              "(rsl-rl silently drops the remainder from recurrent updates)")
+
+    @classmethod
+    def for_method(cls, method: str, **overrides: Any) -> TrainConfig:
+        """A run of ``method`` with its own training recipe (:attr:`PPOMethod.train_defaults
+        <crowdbench.training.methods.PPOMethod.train_defaults>`, e.g. DS-RNN's PPO settings) under ``overrides``;
+        ``TrainConfig(method=...)`` alone keeps this class's defaults (H²INT's)."""
+        from crowdbench.training.methods import PPO_METHODS
+
+        return cls(**{**PPO_METHODS.get(method).train_defaults, "method": method, **overrides})
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-able dict (the ``model`` as a dict of its fields)."""

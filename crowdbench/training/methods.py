@@ -26,13 +26,17 @@ class PPOMethod(ABC):
         name: Registry name (also the ``method`` field of its checkpoints).
         model_config: Frozen dataclass of the architecture (every field documented); stored in checkpoints.
         actor_class: The rsl-rl actor, a :class:`~crowdbench.training.models.RecurrentTrunkActor`.
-        observation: Robot observation the actor reads (``relative`` or ``full_state``).
+        observation: Robot observation the actor reads (``relative``, ``relative_by_id`` or ``full_state``); the
+            training worlds and quick evaluations build it.
     """
 
     name: ClassVar[str]
     model_config: ClassVar[type]
     actor_class: ClassVar[type]
     observation: ClassVar[str] = "relative"
+    train_defaults: ClassVar[dict[str, Any]] = {}
+    """:class:`~crowdbench.training.config.TrainConfig` fields of the method's own recipe (applied by
+    :meth:`TrainConfig.for_method <crowdbench.training.config.TrainConfig.for_method>` and ``crowdbench train``)."""
 
     @abstractmethod
     def actor_cfg(self, model: Any) -> dict[str, Any]:
@@ -53,3 +57,4 @@ class PPOMethod(ABC):
 
 PPO_METHODS: Registry[PPOMethod] = Registry("PPO method", "crowdbench.ppo_methods")
 PPO_METHODS.register("h2int", "crowdbench.policies.h2int.training:H2INTMethod")
+PPO_METHODS.register("dsrnn", "crowdbench.policies.dsrnn.training:DSRNNMethod")

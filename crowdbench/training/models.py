@@ -73,6 +73,17 @@ class RecurrentTrunkActor(MLPModel):
         z[masks] = self.encode_samples({k: obs[k][masks] for k in self.obs_keys})
         return z
 
+    @property
+    def state_size(self) -> int:
+        """Width of the recurrent state carried between steps, ``(1, n, state_size)``."""
+        return self.rnn.rnn.hidden_size
+
+    def step(self, z: torch.Tensor, state: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """One recurrent step with an explicit state (world processes keep their own): encoder outputs ``(n,
+        z_dim)``, state ``(1, n, state_size)`` → latent ``(n, H)``, next state."""
+        out, nxt = self.rnn.rnn(z.unsqueeze(0), state)
+        return out.squeeze(0), nxt
+
     def work(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         """Relative cost of encoding each sample of ``obs`` (leading dims ``(T, B)``), used to give the update's
         threads equal shares; default: equal."""

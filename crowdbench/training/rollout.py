@@ -73,7 +73,7 @@ class RolloutPolicy:
             self.std = gaussian_std(self.actor.distribution).detach().clone()
 
     def initial_state(self, n: int) -> np.ndarray:
-        return np.zeros((1, n, self.actor.rnn.rnn.hidden_size), np.float32)
+        return np.zeros((1, n, self.actor.state_size), np.float32)
 
     def act(self, obs: dict[str, np.ndarray], state: np.ndarray, noise: np.ndarray
             ) -> tuple[np.ndarray, dict[str, np.ndarray], np.ndarray]:
@@ -84,8 +84,7 @@ class RolloutPolicy:
         actor = self.actor
         with torch.inference_mode():
             z = actor.encode({k: torch.from_numpy(obs[k]) for k in actor.obs_keys})
-            out, nxt = actor.rnn.rnn(z.unsqueeze(0), torch.from_numpy(state))
-            latent = out.squeeze(0)
+            latent, nxt = actor.step(z, torch.from_numpy(state))
             mean = actor.mlp(latent)
             std = self.std.expand_as(mean)
             actions = mean + std * torch.from_numpy(noise)

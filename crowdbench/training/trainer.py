@@ -45,7 +45,7 @@ def rsl_cfg(cfg: TrainConfig, method: PPOMethod) -> dict[str, Any]:
         "obs_groups": {"actor": groups, "critic": groups},
         "algorithm": {"class_name": SharedTrunkPPO, "num_learning_epochs": cfg.epochs,
                       "num_mini_batches": cfg.mini_batches, "learning_rate": cfg.learning_rate,
-                      "entropy_coef": cfg.entropy_coef, "schedule": "adaptive", "desired_kl": cfg.desired_kl,
+                      "entropy_coef": cfg.entropy_coef, "schedule": cfg.schedule, "desired_kl": cfg.desired_kl,
                       "gamma": cfg.gamma, "lam": cfg.lam, "max_grad_norm": cfg.max_grad_norm,
                       "value_loss_coef": cfg.value_loss_coef, "clip_param": cfg.clip},
         "actor": {"class_name": method.actor_class, **method.actor_cfg(cfg.model)},
@@ -68,7 +68,8 @@ class Trainer:
                                 delta=cfg.rho_delta, eta=cfg.eta, window=cfg.window, cooldown=cfg.window,
                                 enabled=cfg.anneal)
         self.env = CrowdVecEnv(cfg.num_envs, seed=cfg.seed, curriculum=curriculum, humans_range=cfg.humans_range,
-                               reward_scale=cfg.reward_scale, processes=cfg.env_processes)
+                               reward_scale=cfg.reward_scale, processes=cfg.env_processes,
+                               observation=self.method.observation)
         rcfg = rsl_cfg(cfg, self.method)
         self.runner = OnPolicyRunner(self.env, rcfg, log_dir=None)
         self.alg: SharedTrunkPPO = self.runner.alg

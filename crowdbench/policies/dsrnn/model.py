@@ -166,6 +166,14 @@ class DSRNNActor(RecurrentTrunkActor):
     def make_rnn(self, z_dim: int, latent: int) -> nn.Module:
         return DSRNNCore(self.dsrnn, self.slots)
 
+    @property
+    def state_size(self) -> int:
+        return self.rnn.state_dim
+
+    def step(self, z: torch.Tensor, state: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        latent, h = self.rnn.cell(z, state[0])
+        return latent, h.unsqueeze(0)
+
     def encode_samples(self, obs):
         """The flat per-step input of :class:`DSRNNCore`: robot ‖ positions ‖ mask ``(n, 9 + 3·slots)``."""
         n = obs["robot"].shape[0]
