@@ -1,5 +1,6 @@
 """DS-RNN's recurrence: rollout steps and the update's padded trajectories agree, the attention sees only the slots in
-view and no slot order, done worlds restart from zero, and the actor runs through rsl-rl's interface."""
+view and no slot order, out-of-view slots keep their state, done worlds restart from zero, and the actor trains and
+drives a robot through crowdbench's PPO path."""
 
 from __future__ import annotations
 
@@ -53,7 +54,12 @@ def test_attention_ignores_slots_out_of_view_and_slot_order():
     x = _obs(n, g)
     h = torch.randn(n, core.state_dim, generator=g)
     with torch.no_grad():
-        out, _ = core.cell(x, h)
+        out, h_next = core.cell(x, h)
+        # a slot out of view keeps its state; a slot in view updates it
+        seen = (x[:, 9 + 2 * K:] > 0.5).reshape(-1)
+        before, after = (v[:, 256:256 + K * 256].reshape(n * K, 256) for v in (h, h_next))
+        torch.testing.assert_close(after[~seen], before[~seen])
+        assert (after[seen] != before[seen]).any(-1).all()
         # what a slot out of view holds (input and state) does not matter now
         hidden = x[:, 9 + 2 * K:] < 0.5
         x2, h2 = x.clone(), h.clone()
