@@ -9,13 +9,11 @@ from __future__ import annotations
 import os
 from typing import Any
 
-import numpy as np
-import torch
-
 from crowdbench import checkpoints
 from crowdbench.config import WorldConfig
-from crowdbench.policies.base import RobotPolicy, register
+from crowdbench.policies.base import register
 from crowdbench.policies.dsrnn.model import DSRNNActor, DSRNNConfig, build_actor
+from crowdbench.policies.recurrent import RecurrentActorPolicy
 
 METHOD = "dsrnn"
 
@@ -33,7 +31,7 @@ def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[DSRNNActor,
 
 
 @register(METHOD)
-class DSRNNPolicy(RobotPolicy):
+class DSRNNPolicy(RecurrentActorPolicy):
     """The trained DS-RNN policy.
 
     Args:
@@ -47,28 +45,7 @@ class DSRNNPolicy(RobotPolicy):
 
     def __init__(self, config: WorldConfig | None = None, checkpoint: str | None = None,
                  actor: DSRNNActor | None = None) -> None:
-        super().__init__(config)
-        self.meta: dict[str, Any] = {}
+        meta: dict[str, Any] = {}
         if actor is None:
-            actor, self.meta = load_actor(checkpoint)
-        if actor.slots != self.config.max_humans_observed:
-            raise ValueError(f"max_humans_observed={self.config.max_humans_observed} but the checkpoint was trained "
-                             f"with {actor.slots} pedestrian slots")
-        self.actor = actor.eval()
-        self.hidden: torch.Tensor | None = None
-
-    @torch.inference_mode()
-    def reset(self, done: np.ndarray | None = None) -> None:
-        if done is None or self.hidden is None:
-            self.hidden = None
-        else:
-            self.hidden[:, torch.from_numpy(np.asarray(done, dtype=bool))] = 0.0
-
-    @torch.inference_mode()
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        x = {k: torch.as_tensor(obs[k], dtype=torch.float32) for k in ("robot", "humans", "mask")}
-        n = len(x["robot"])
-        if self.hidden is None or self.hidden.shape[1] != n:
-            self.hidden = torch.zeros(1, n, self.actor.state_size)
-        latent, self.hidden = self.actor.step(self.actor.encode_samples(x), self.hidden)
-        return self.actor.mlp(latent).numpy().astype(np.float64)
+            actor, meta = load_actor(checkpoint)
+        super().__init__(config, actor, actor.slots, meta)

@@ -1,7 +1,8 @@
 """H²INT as a crowdbench robot policy: a trained checkpoint (``crowdbench train h2int``) driving the robot.
 
 Deterministic (the Gaussian's mean), one GRU state per world, the packed encoder (:meth:`H2INTEncoder.packed
-<crowdbench.policies.h2int.model.H2INTEncoder.packed>`) under ``torch.inference_mode``.
+<crowdbench.policies.h2int.model.H2INTEncoder.packed>`) under ``torch.inference_mode``
+(:class:`~crowdbench.policies.recurrent.RecurrentActorPolicy`).
 """
 
 from __future__ import annotations
@@ -9,13 +10,11 @@ from __future__ import annotations
 import os
 from typing import Any
 
-import numpy as np
-import torch
-
 from crowdbench import checkpoints
 from crowdbench.config import WorldConfig
-from crowdbench.policies.base import RobotPolicy, register
+from crowdbench.policies.base import register
 from crowdbench.policies.h2int.model import H2INTActor, H2INTConfig, build_actor
+from crowdbench.policies.recurrent import RecurrentActorPolicy
 
 METHOD = "h2int"
 
@@ -43,7 +42,7 @@ def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[H2INTActor,
 
 
 @register(METHOD)
-class H2INTPolicy(RobotPolicy):
+class H2INTPolicy(RecurrentActorPolicy):
     """The trained H²INT policy.
 
     Args:
@@ -58,31 +57,7 @@ class H2INTPolicy(RobotPolicy):
 
     def __init__(self, config: WorldConfig | None = None, checkpoint: str | None = None,
                  actor: H2INTActor | None = None) -> None:
-        super().__init__(config)
-        self.meta: dict[str, Any] = {}
+        meta: dict[str, Any] = {}
         if actor is None:
-            actor, self.meta = load_actor(checkpoint)
-        n_max = actor.encoder.pos_emb.num_embeddings - 1
-        if n_max != self.config.max_humans_observed:
-            raise ValueError(f"max_humans_observed={self.config.max_humans_observed} but the checkpoint was trained "
-                             f"with N_max={n_max}")
-        self.actor = actor.eval()
-        self.hidden: torch.Tensor | None = None
-
-    @torch.inference_mode()
-    def reset(self, done: np.ndarray | None = None) -> None:
-        if done is None or self.hidden is None:
-            self.hidden = None
-        else:
-            self.hidden[:, torch.from_numpy(np.asarray(done, dtype=bool))] = 0.0
-
-    @torch.inference_mode()
-    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
-        robot = torch.as_tensor(obs["robot"], dtype=torch.float32)
-        edges = torch.as_tensor(obs["humans"], dtype=torch.float32)
-        valid = torch.as_tensor(obs["mask"]) > 0.5
-        if self.hidden is None or self.hidden.shape[1] != len(robot):
-            self.hidden = torch.zeros(1, len(robot), self.actor.rnn.rnn.hidden_size)
-        z = self.actor.encoder.packed(robot, edges, valid)
-        out, self.hidden = self.actor.rnn.rnn(z.unsqueeze(0), self.hidden)
-        return self.actor.mlp(out.squeeze(0)).numpy().astype(np.float64)
+            actor, meta = load_actor(checkpoint)
+        super().__init__(config, actor, actor.encoder.pos_emb.num_embeddings - 1, meta)

@@ -1,0 +1,52 @@
+"""The robot policy of a trained recurrent PPO actor (H²INT, DS-RNN): deterministic (the Gaussian's mean), one
+recurrent state per world, under ``torch.inference_mode``. Imports torch: the learned methods' policy modules load it
+on first use."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+
+from crowdbench.config import WorldConfig
+from crowdbench.policies.base import RobotPolicy
+from crowdbench.training.models import RecurrentTrunkActor
+
+
+class RecurrentActorPolicy(RobotPolicy):
+    """A :class:`~crowdbench.training.models.RecurrentTrunkActor` driving the robot: ``encode_samples`` → ``step``
+    with each world's state → the head's mean action.
+
+    Args:
+        config: World configuration; ``max_humans_observed`` must equal the actor's ``slots``.
+        actor: The actor (in eval mode from here on).
+        slots: Pedestrian slots the actor was built for.
+        meta: The checkpoint's metadata (kept as :attr:`meta`).
+    """
+
+    def __init__(self, config: WorldConfig | None, actor: RecurrentTrunkActor, slots: int,
+                 meta: dict[str, Any] | None = None) -> None:
+        super().__init__(config)
+        if slots != self.config.max_humans_observed:
+            raise ValueError(f"max_humans_observed={self.config.max_humans_observed} but the checkpoint was trained "
+                             f"with N_max={slots}")
+        self.meta = meta or {}
+        self.actor = actor.eval()
+        self.hidden: torch.Tensor | None = None
+
+    @torch.inference_mode()
+    def reset(self, done: np.ndarray | None = None) -> None:
+        if done is None or self.hidden is None:
+            self.hidden = None
+        else:
+            self.hidden[:, torch.from_numpy(np.asarray(done, dtype=bool))] = 0.0
+
+    @torch.inference_mode()
+    def act(self, obs: dict[str, np.ndarray]) -> np.ndarray:
+        x = {k: torch.as_tensor(obs[k], dtype=torch.float32) for k in self.actor.obs_keys}
+        n = len(x[self.actor.obs_keys[0]])
+        if self.hidden is None or self.hidden.shape[1] != n:
+            self.hidden = torch.zeros(1, n, self.actor.state_size)
+        latent, self.hidden = self.actor.step(self.actor.encode_samples(x), self.hidden)
+        return self.actor.mlp(latent).numpy().astype(np.float64)
