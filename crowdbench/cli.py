@@ -145,7 +145,7 @@ def train_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
-VALUE_ONLY = ("worlds", "il_episodes", "rl_episodes")
+VALUE_ONLY = ("worlds", "il_episodes", "rl_episodes", "free_space")
 
 
 def train_value_cmd(args: argparse.Namespace) -> int:
@@ -374,6 +374,9 @@ def main(argv: list[str] | None = None) -> int:
                    help="cadrl/sarl: episodes run at once (default 10; same episode and update counts)")
     p.add_argument("--il-episodes", type=int, default=None, help="cadrl/sarl: ORCA demonstrations (default 3000)")
     p.add_argument("--rl-episodes", type=int, default=None, help="cadrl/sarl: TD-learning episodes (default 10000)")
+    p.add_argument("--free-space", action=argparse.BooleanOptionalAction, default=None,
+                   help="cadrl/sarl: value states with nobody sensed analytically (default: on for cadrl, off for "
+                        "sarl)")
     p.set_defaults(func=train_cmd)
     p = sub.add_parser("export", help="export a checkpoint to TorchScript and ONNX")
     p.add_argument("--checkpoint", default=None, help="H²INT checkpoint (path or shipped name; default: h2int)")

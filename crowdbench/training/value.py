@@ -162,9 +162,20 @@ class ValueTrainConfig:
     """Wall-clock budget (0 = none); the run stops at the first round boundary past it."""
     threads: int = 1
     """torch threads."""
+    free_space: bool | None = None
+    """Value states with nobody sensed analytically, in the look-ahead and in the TD targets
+    (:func:`~crowdbench.policies.value.lookahead.free_space_value`). ``None``: the method's default — on for CADRL,
+    whose min-over-pedestrians value of the lone far dummy sent the robot away from the crowd (README), off for SARL,
+    whose attention pooling was barely affected (planning-only test, 97 → 99 %). Absent from a saved configuration
+    (runs before it existed): off."""
 
     def __post_init__(self) -> None:
         from crowdbench.policies.value.model import build_net
+
+        if self.free_space is None:
+            object.__setattr__(self, "free_space", self.method == "cadrl")
+        if not isinstance(self.free_space, bool):
+            raise ValueError(f"free_space={self.free_space!r}; valid choices: true, false")
 
         if self.method not in VALUE_METHODS:
             raise ValueError(f"method={self.method!r}; valid choices: {', '.join(VALUE_METHODS)}")
@@ -203,7 +214,7 @@ class ValueTrainConfig:
     def from_dict(cls, d: dict[str, Any]) -> ValueTrainConfig:
         from crowdbench.training.config import _strict
 
-        return _strict(cls, d, "value train config")
+        return _strict(cls, {"free_space": False, **d}, "value train config")
 
     def epsilon(self, episode: int) -> float:
         """CrowdNav's linear exploration schedule at RL episode ``episode``."""
@@ -214,12 +225,14 @@ class ValueTrainConfig:
 
 @dataclass
 class Rollout:
-    """One finished episode: joint states ``(T, K, 13)``, masks ``(T, K)``, CrowdNav rewards ``(T,)``, outcome."""
+    """One finished episode: joint states ``(T, K, 13)``, masks ``(T, K)``, CrowdNav rewards ``(T,)``, outcome, and
+    which states had nobody sensed ``(T,)`` (their slot 0 holds the dummy)."""
 
     states: np.ndarray
     masks: np.ndarray
     rewards: np.ndarray
     outcome: str
+    free: np.ndarray
 
 
 class ValueTrainer:
@@ -244,7 +257,7 @@ class ValueTrainer:
         self.target = copy.deepcopy(self.net)
         self.config = make_config(humans_range=cfg.humans_range)
         policy_cls = CADRLPolicy if cfg.method == "cadrl" else SARLPolicy
-        self.policy = policy_cls(self.config, net=self.net, gamma=cfg.gamma)
+        self.policy = policy_cls(self.config, net=self.net, gamma=cfg.gamma, free_space=cfg.free_space)
         self.demonstrator = ORCAPolicy(self.config)  # CrowdNav's il_policy: ORCA, safety space 0.15 m
         self.world = CrowdWorld(self.config, cfg.worlds, "circle_crossing", "responsive_orca")
         self.obs = make_observation("full_state", self.config)
@@ -300,10 +313,11 @@ class ValueTrainer:
             else:
                 action[live], scene = self.policy.plan(obs, epsilon, self.rng)
             states, masks = current_state(scene).numpy(), scene.mask.numpy()
+            free = ~scene.sensed.any(dim=1).numpy()
             res = world.step(action)
             r = CROWDNAV_REWARD.of_step(res.outcome == SUCCESS, res.outcome == COLLISION, res.d_min, world.dt)
             for j, b in enumerate(np.flatnonzero(live)):
-                buf[b].append((states[j], masks[j], r[b]))
+                buf[b].append((states[j], masks[j], r[b], free[j]))
                 if res.terminated[b] or res.truncated[b]:
                     outcome[b] = OUTCOMES[int(res.outcome[b])]
                     live[b] = False
@@ -313,22 +327,32 @@ class ValueTrainer:
             T = len(buf[b])
             states = np.zeros((T, n_max, 13), np.float32)
             masks = np.zeros((T, n_max), np.float32)
-            for t, (s, m, _) in enumerate(buf[b]):
+            for t, (s, m, _, _) in enumerate(buf[b]):
                 states[t, :s.shape[0]], masks[t, :m.shape[0]] = s, m
-            out.append(Rollout(states, masks, np.array([x[2] for x in buf[b]]), outcome[b]))
+            out.append(Rollout(states, masks, np.array([x[2] for x in buf[b]]), outcome[b],
+                               np.array([x[3] for x in buf[b]], dtype=bool)))
         return out
 
     def targets(self, ep: Rollout, imitation: bool) -> np.ndarray:
-        """Value targets ``(T,)``: discounted returns (imitation) or one-step TD targets with the target network."""
+        """Value targets ``(T,)``: discounted returns (imitation) or one-step TD targets with the target network
+        (next states with nobody sensed valued by ``free_space_value`` when the run uses it)."""
         import torch
+
+        from crowdbench.policies.value.lookahead import free_space_value
 
         if imitation:
             return discounted_returns(ep.rewards, self.gamma_step)
         values = ep.rewards.astype(np.float64).copy()
         if len(values) > 1:
+            states = torch.from_numpy(ep.states[1:])
             with torch.inference_mode():
-                nxt = self.target(torch.from_numpy(ep.states[1:]), torch.from_numpy(ep.masks[1:] > 0.5)).numpy()
-            values[:-1] += self.gamma_step * nxt
+                nxt = self.target(states, torch.from_numpy(ep.masks[1:] > 0.5))
+                if self.cfg.free_space and ep.free[1:].any():
+                    free = torch.from_numpy(ep.free[1:])
+                    robot = states[free, 0]  # [d_g, v_pref, ...] of the joint state
+                    nxt[free] = free_space_value(robot[:, 0], robot[:, 1], self.config.time_step, self.cfg.gamma,
+                                                 self.config.reward.goal_tolerance)
+            values[:-1] += self.gamma_step * nxt.numpy()
         return values
 
     def store(self, episodes: list[Rollout], imitation: bool) -> None:
@@ -481,7 +505,8 @@ class ValueTrainer:
         from crowdbench import __version__, checkpoints
 
         return {"format": checkpoints.FORMAT, "method": self.cfg.method, "crowdbench_version": __version__,
-                "model": dict(self.cfg.model), "gamma": self.cfg.gamma, "n_max": self.config.max_humans_observed,
+                "model": dict(self.cfg.model), "gamma": self.cfg.gamma, "free_space": self.cfg.free_space,
+                "n_max": self.config.max_humans_observed,
                 "seed": self.cfg.seed, "phase": self.phase, "episodes": self.episode, "elapsed_s": self.elapsed,
                 "train_config": self.cfg.to_dict(), "net": self.net.state_dict()}
 

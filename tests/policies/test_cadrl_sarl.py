@@ -19,6 +19,7 @@ from crowdbench.policies.value.lookahead import (
     Scene,
     action_set,
     current_state,
+    free_space_value,
     lookahead,
 )
 from crowdbench.policies.value.model import build_net
@@ -138,6 +139,50 @@ def test_greedy_lookahead_heads_for_the_goal_and_sidesteps_a_collision():
     scene = Scene.from_obs(obs_of((0, 0), (0, 5), [(0, 0.9, 0, -1, 0.3)]), 5.0)
     chosen = torch.as_tensor(blocked, dtype=torch.float32)[None]
     assert lookahead(scene, chosen, 0.25, 0.3)[1][0, 0] > CROWDNAV_REWARD.collision
+
+
+class FleeValue(torch.nn.Module):
+    """A value that prefers being far from the goal (+d_g): what a misfitted network can say about empty space."""
+
+    def forward(self, state, mask):
+        return state[:, 0, 0]
+
+
+def test_free_space_value_by_hand_and_it_overrides_the_network_only_when_nobody_is_sensed():
+    dt, gamma, tol = 0.25, 0.9, 0.3
+    v = free_space_value(torch.tensor([0.2, 0.3, 5.3]), torch.tensor([1.0, 1.0, 1.0]), dt, gamma, tol)
+    np.testing.assert_allclose(v.numpy(), [1.0, 1.0, 0.9**5], rtol=1e-6)  # 20 steps of γ^{0.25}
+    cfg = make_config(max_humans_observed=6)
+    fleeing = SARLPolicy(cfg, net=FleeValue(), free_space=False)
+    assert fleeing.act(obs_of((0, 0), (0, 5), []))[0][1] < -0.9  # the network's view of empty space: run away
+    analytic = SARLPolicy(cfg, net=FleeValue(), free_space=True)
+    np.testing.assert_allclose(analytic.act(obs_of((0, 0), (0, 5), []))[0], [0.0, 1.0], atol=1e-6)
+    crowd = obs_of((0, 0), (0, 5), [(3, 0, 0, 0, 0.3)])  # someone sensed: the network decides, as before
+    np.testing.assert_array_equal(analytic.act(crowd), fleeing.act(crowd))
+
+
+def test_td_targets_use_the_free_space_value_for_next_states_with_nobody_sensed(tmp_path):
+    from crowdbench.training.value import Rollout
+
+    assert ValueTrainConfig(method="cadrl").free_space and not ValueTrainConfig(method="sarl").free_space
+    assert not ValueTrainConfig.from_dict({"method": "cadrl"}).free_space  # saved before the option: off
+    trainer = ValueTrainer(tiny_value(method="cadrl"), str(tmp_path / "run"), quiet=True)
+    trainer.target = FleeValue()
+    T, n = 4, trainer.config.max_humans_observed
+    states = np.zeros((T, n, 13), np.float32)
+    states[:, 0, 0] = [6.0, 5.0, 4.0, 3.3]  # d_g
+    states[:, 0, 1] = 1.0  # v_pref
+    masks = np.zeros((T, n), np.float32)
+    masks[:, 0] = 1.0
+    free = np.array([False, True, False, True])
+    ep = Rollout(states, masks, np.array([0.0, -0.1, 0.0, 0.0]), "success", free)
+    got = trainer.targets(ep, imitation=False)
+    g = trainer.gamma_step
+    want = [0.0 + g * 0.9 ** (5.0 - 0.3), -0.1 + g * 4.0, 0.0 + g * 0.9 ** (3.3 - 0.3), 0.0]
+    np.testing.assert_allclose(got, want, rtol=1e-5)
+    trainer.save()
+    assert checkpoints.load(tmp_path / "run" / "policy.pt", "cadrl")["free_space"] is True
+    assert make_policy("cadrl", checkpoint=str(tmp_path / "run" / "policy.pt")).free_space
 
 
 def tiny_value(**kw) -> ValueTrainConfig:

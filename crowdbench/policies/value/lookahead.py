@@ -15,6 +15,11 @@ Conventions (CrowdNav ``multi_human_rl.py`` / ``cadrl.py`` at 20d6780):
 * **Sensing**: only pedestrians whose centre is within ``sensing_range`` enter the state (the paper's 5 m, the range
   every method of the leaderboard sees); a state with none gets one dummy pedestrian at rest 15 m behind the robot,
   far from any interaction, as CrowdNav++ pads unseen slots with far-away dummies.
+* **Free space** (``free_space=True``, CADRL's default): a state in which nobody is sensed is valued analytically,
+  :func:`free_space_value` — the discounted goal reward of driving straight there at v_pref — instead of by the
+  network on the dummy. CrowdNav never meets such states (its robot sees every human); here CADRL's
+  min-over-pedestrians value of the lone dummy sent the robot away from the crowd, where timeouts are never stored and
+  so never corrected (README, "Baselines CADRL and SARL").
 """
 
 from __future__ import annotations
@@ -174,12 +179,25 @@ def lookahead(scene: Scene, actions: torch.Tensor, dt: float, goal_tolerance: fl
     return nxt, r
 
 
+def free_space_value(goal_distance: torch.Tensor, v_pref: torch.Tensor, dt: float, gamma: float,
+                     goal_tolerance: float) -> torch.Tensor:
+    """Value of a state with nobody sensed: ``γ̄^{max(d_g − tolerance, 0)/(v_pref·Δt)}`` with γ̄ = γ^{Δt·v_pref} —
+    the success reward (1) discounted by the steps of a straight drive at v_pref. Shapes broadcast; [-]."""
+    steps = (goal_distance - goal_tolerance).clamp_min(0.0) / (v_pref * dt)
+    return torch.pow(torch.tensor(gamma, dtype=goal_distance.dtype), dt * v_pref * steps)
+
+
 def action_values(net: torch.nn.Module, scene: Scene, actions: torch.Tensor, dt: float, gamma: float,
-                  goal_tolerance: float) -> torch.Tensor:
+                  goal_tolerance: float, free_space: bool = False) -> torch.Tensor:
     """``Q(s, a) = r + γ^{Δt·v_pref}·V(s′)`` for every scene and action ``(B, M)``: one network pass over all
-    ``B·M`` next states."""
+    ``B·M`` next states (with ``free_space``, scenes with nobody sensed take :func:`free_space_value` instead)."""
     nxt, r = lookahead(scene, actions, dt, goal_tolerance)
     B, M, K, _ = nxt.shape
     mask = scene.mask.unsqueeze(1).expand(B, M, K).reshape(B * M, K)
     v = net(nxt.reshape(B * M, K, -1), mask).view(B, M)
+    if free_space:
+        free = ~scene.sensed.any(dim=1)
+        if free.any():
+            v_pref = scene.v_pref[free].unsqueeze(1)
+            v[free] = free_space_value(nxt[free][:, :, 0, 0], v_pref, dt, gamma, goal_tolerance)
     return r + torch.pow(torch.tensor(gamma), dt * scene.v_pref).unsqueeze(1) * v

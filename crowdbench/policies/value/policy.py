@@ -27,7 +27,8 @@ def load_net(method: str, checkpoint: str | os.PathLike | None = None) -> tuple[
     net = build_net(method, ckpt["model"])
     net.load_state_dict(ckpt["net"])
     meta = {k: ckpt.get(k) for k in ("seed", "episodes", "phase")}
-    return net.eval(), {**meta, "gamma": float(ckpt.get("gamma", GAMMA)), "path": path}
+    return net.eval(), {**meta, "gamma": float(ckpt.get("gamma", GAMMA)),
+                        "free_space": bool(ckpt.get("free_space", False)), "path": path}
 
 
 class ValuePolicy(RobotPolicy):
@@ -40,6 +41,9 @@ class ValuePolicy(RobotPolicy):
         gamma: Discount per second at v_pref = 1 (default: the checkpoint's, else 0.9).
         sensing_range: Pedestrians beyond this centre distance are not considered [m] (default:
             ``config.sensing_range``, the paper's 5 m).
+        free_space: Value states with nobody sensed analytically
+            (:func:`~crowdbench.policies.value.lookahead.free_space_value`; default: as the checkpoint was trained,
+            ``False`` for checkpoints that do not say).
     """
 
     observation = "full_state"
@@ -47,7 +51,7 @@ class ValuePolicy(RobotPolicy):
 
     def __init__(self, config: WorldConfig | None = None, checkpoint: str | None = None,
                  net: torch.nn.Module | None = None, gamma: float | None = None,
-                 sensing_range: float | None = None) -> None:
+                 sensing_range: float | None = None, free_space: bool | None = None) -> None:
         super().__init__(config)
         self.meta: dict[str, Any] = {}
         if net is None:
@@ -57,6 +61,7 @@ class ValuePolicy(RobotPolicy):
         if not 0.0 < self.gamma <= 1.0:
             raise ValueError(f"gamma={self.gamma}; valid choices: a number in (0, 1]")
         self.sensing_range = float(sensing_range if sensing_range is not None else self.config.sensing_range)
+        self.free_space = bool(free_space if free_space is not None else self.meta.get("free_space", False))
         self.actions = torch.as_tensor(action_set(), dtype=torch.float32)
 
     @torch.inference_mode()
@@ -66,7 +71,8 @@ class ValuePolicy(RobotPolicy):
         drawn from ``rng``) and the scenes they were chosen in."""
         scene = Scene.from_obs(obs, self.sensing_range)
         cfg = self.config
-        q = action_values(self.net, scene, self.actions, cfg.time_step, self.gamma, cfg.reward.goal_tolerance)
+        q = action_values(self.net, scene, self.actions, cfg.time_step, self.gamma, cfg.reward.goal_tolerance,
+                          self.free_space)
         idx = q.argmax(dim=1).numpy()
         if epsilon > 0.0:
             if rng is None:
