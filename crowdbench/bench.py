@@ -249,7 +249,7 @@ def decision_ms(policy_name: str, repeats: int, num_humans: int = 20, **policy_k
     world.reset(seeds=[0])
     for _ in range(20):
         world.step(np.zeros((1, 2)))
-    return _act_ms(policy, make_observation(policy.observation, cfg).build(world), repeats)
+    return _act_ms(policy, make_observation(policy.observation, cfg, **policy.observation_kwargs).build(world), repeats)
 
 
 def decision_ms_all(repeats: int) -> dict[str, Any]:

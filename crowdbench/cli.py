@@ -39,12 +39,13 @@ def demo(args: argparse.Namespace) -> int:
     from crowdbench.render import save_gif
 
     name = getattr(args, "policy_pos", None) or args.policy or "orca"
-    env = CrowdParallelEnv(layout=args.layout, num_humans=args.humans, human_model=args.human_model,
-                           human_model_kwargs=_model_kwargs(args.human_model, args.responsiveness),
-                           render_mode="rgb_array", observation=POLICIES.get(name).observation)
+    kwargs = {"layout": args.layout, "num_humans": args.humans, "human_model": args.human_model,
+              "human_model_kwargs": _model_kwargs(args.human_model, args.responsiveness), "render_mode": "rgb_array",
+              "observation": POLICIES.get(name).observation}
     args.policy, args.policy_pos = name, None
     args.checkpoint = getattr(args, "checkpoint", None)
-    policy = _policy(args, env.config)
+    policy = _policy(args, CrowdParallelEnv(**kwargs).config)
+    env = CrowdParallelEnv(**kwargs, observation_kwargs=policy.observation_kwargs)
     obs, _ = env.reset(seed=args.seed)
     frames = [env.render()]
     path, info = 0.0, {}
@@ -76,7 +77,7 @@ def _policy(args: argparse.Namespace, config=None):
     return make_policy(name or "orca", config, **({"checkpoint": args.checkpoint} if args.checkpoint else {}))
 
 
-CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl", "dsrnn")
+CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl", "dsrnn", "aig")
 """Registered policies known to take ``checkpoint=`` (listed in errors; any policy with the argument accepts it)."""
 
 
@@ -172,6 +173,35 @@ def train_value_cmd(args: argparse.Namespace) -> int:
     trainer = train_value(cfg, out, resume=args.resume)
     print(f"wrote {os.path.join(out, 'policy.pt')}, last.pt and curve.png ({trainer.phase}: "
           f"{trainer.episode} episodes, {trainer.elapsed / 60:.1f} min)")
+    return 0
+
+
+def predictor_cmd(args: argparse.Namespace) -> int:
+    """Record crowd trajectories, train the learned predictor, or compare predictors (ADE / FDE)."""
+    from crowdbench.predictors import training as pt
+
+    if args.action == "record":
+        out = args.out or "runs/gst-data.npz"
+        cfg = pt.RecordConfig(worlds=args.worlds, steps=args.steps, stride=args.stride, seed=args.seed)
+        data = pt.record(cfg, out)
+        print(f"wrote {out}: {len(data['pos']):,} scenes, {int(data['valid'].sum()):,} scored pedestrians")
+        return 0
+    if args.data is None:
+        raise ValueError(f"predictor {args.action}: --data is required (a file written by `crowdbench predictor "
+                         "record`)")
+    data = pt.load_data(args.data)
+    if args.action == "train":
+        tcfg = pt.PredictorTrainConfig(epochs=args.epochs, seed=args.seed)
+        out = args.out or "runs/gst"
+        m = pt.train(data, out, tcfg)
+        print(f"wrote {os.path.join(out, 'gst.pt')}: held-out ADE {m['ade']:.3f} m, FDE {m['fde']:.3f} m "
+              f"(constant velocity {m['const_vel_ade']:.3f} / {m['const_vel_fde']:.3f} m)")
+        return 0
+    rows = pt.compare(data, args.checkpoint)
+    for name, (ade, fde) in rows.items():
+        print(f"{name:>10}: ADE {ade:.3f} m, FDE {fde:.3f} m")
+    if args.json:
+        write_text(args.json, json.dumps({k: {"ade": a, "fde": f} for k, (a, f) in rows.items()}, indent=1) + "\n")
     return 0
 
 
@@ -378,6 +408,18 @@ def main(argv: list[str] | None = None) -> int:
                    help="cadrl/sarl: value states with nobody sensed analytically (default: on for cadrl, off for "
                         "sarl)")
     p.set_defaults(func=train_cmd)
+    p = sub.add_parser("predictor", help="trajectory predictor (AIG-GST): record crowd data, train, compare")
+    p.add_argument("action", choices=("record", "train", "compare"))
+    p.add_argument("--out", default=None, help="record: the .npz to write; train: the run folder (gst.pt)")
+    p.add_argument("--data", default=None, help="train/compare: scenes written by `predictor record`")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--worlds", type=int, default=32, help="record: worlds stepped at once")
+    p.add_argument("--steps", type=int, default=2000, help="record: steps per world")
+    p.add_argument("--stride", type=int, default=4, help="record: steps between recorded scenes")
+    p.add_argument("--epochs", type=int, default=15, help="train: passes over the scenes")
+    p.add_argument("--checkpoint", default=None, help="compare: the gst checkpoint (default: the shipped one)")
+    p.add_argument("--json", default=None, help="compare: also write the errors to this JSON file")
+    p.set_defaults(func=predictor_cmd)
     p = sub.add_parser("export", help="export a checkpoint to TorchScript and ONNX")
     p.add_argument("--checkpoint", default=None, help="H²INT checkpoint (path or shipped name; default: h2int)")
     p.add_argument("--out", default="export")

@@ -41,7 +41,7 @@ def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: 
     world = CrowdWorld(config, B, layout, model)
     twin = (CrowdWorld(dataclasses.replace(config, robot_visible=False), B, layout, twin_model)
             if counterfactual else None)
-    obs_builder = make_observation(policy.observation, config)
+    obs_builder = make_observation(policy.observation, config, **policy.observation_kwargs)
     meter = EpisodeMeter(B, world.dt, config.reward.goal_tolerance)
     next_k = B
     ep_seed = np.arange(B) + seed

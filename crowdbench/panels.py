@@ -28,7 +28,7 @@ def episode(policy: Any, layout: str, humans: int, seed: int, responsiveness: fl
     world = CrowdWorld(cfg, 1, layout, "responsive_orca", {"responsiveness": responsiveness})
     world.reset(seeds=[seed])
     policy.reset()
-    obs_builder = make_observation(policy.observation, cfg)
+    obs_builder = make_observation(policy.observation, cfg, **policy.observation_kwargs)
     track, active, goal = [world.pos[0].copy()], [world.active[0].copy()], world.goal[0, 0].copy()
     while True:
         res = world.step(policy.act(obs_builder.build(world)))

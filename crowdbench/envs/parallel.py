@@ -19,8 +19,8 @@ time limit (``time_limit``, or ``max_cycles`` steps if set) everyone is truncate
 a pedestrian reaching its goal gets a new one from the layout.
 
 Arguments: ``layout``, ``num_humans``, ``human_model`` (name or instance), ``human_model_kwargs``, ``seed`` (used
-by the first ``reset()`` without a seed), ``render_mode`` (``"rgb_array"``), ``observation``, ``max_cycles``, and any
-:class:`~crowdbench.config.WorldConfig` field as a keyword.
+by the first ``reset()`` without a seed), ``render_mode`` (``"rgb_array"``), ``observation`` (and its builder's
+``observation_kwargs``), ``max_cycles``, and any :class:`~crowdbench.config.WorldConfig` field as a keyword.
 """
 
 from __future__ import annotations
@@ -43,7 +43,8 @@ class CrowdParallelEnv(ParallelEnv):
 
     def __init__(self, layout: str = "circle_crossing", num_humans: int = 20, human_model: Any = "orca",
                  seed: int | None = None, render_mode: str | None = None, observation: str = "relative",
-                 max_cycles: int | None = None, human_model_kwargs: dict | None = None, **world_options: Any):
+                 max_cycles: int | None = None, human_model_kwargs: dict | None = None,
+                 observation_kwargs: dict | None = None, **world_options: Any):
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode={render_mode!r}; valid choices: None, 'rgb_array'")
         if max_cycles is not None and (not isinstance(max_cycles, (int, np.integer)) or isinstance(max_cycles, bool)
@@ -55,7 +56,7 @@ class CrowdParallelEnv(ParallelEnv):
         self.config = self.world.config
         self.render_mode = render_mode
         self.max_cycles = max_cycles
-        self._obs_builder = make_observation(observation, self.config)
+        self._obs_builder = make_observation(observation, self.config, **(observation_kwargs or {}))
         self._seed = seed
         H = self.world.num_humans
         self.possible_agents = ["robot"] + [f"human_{i}" for i in range(H)]

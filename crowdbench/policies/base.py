@@ -13,7 +13,7 @@ Register it with ``crowdbench.policies.register("mine", MyPolicy)`` or the entry
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -37,6 +37,11 @@ class RobotPolicy(ABC):
         if self.config.kinematics not in self.kinematics:
             raise ValueError(f"{type(self).__name__} supports kinematics {self.kinematics}, "
                              f"got {self.config.kinematics!r}")
+
+    @property
+    def observation_kwargs(self) -> dict[str, Any]:
+        """Options of the :attr:`observation` builder (e.g. which predictor ``predicted`` runs); default none."""
+        return {}
 
     def reset(self, done: np.ndarray | None = None) -> None:
         """Forget per-episode state (e.g. recurrent memory) of worlds where ``done`` ``(B,)`` is True (all if None)."""

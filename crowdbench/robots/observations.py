@@ -7,6 +7,9 @@ Robot observations (registry :data:`OBSERVATIONS`):
   ``mask`` ``(N_max,)`` = 1 for real entries. No pedestrian velocities, no responsiveness state.
 * ``full_state`` (for ORCA/SF/CADRL/SARL-style baselines): ``robot`` as above; ``humans`` ``(N_max, 5)`` =
   (Δx, Δy, vx, vy, r) of *every* pedestrian (no range limit), nearest first; ``mask``.
+* ``relative_by_id``: ``relative`` with slot j = pedestrian j (recurrent per-pedestrian states, DS-RNN).
+* ``predicted`` (AIG-GST's, :mod:`crowdbench.predictors.observation`): ``relative`` plus each pedestrian's predicted
+  positions; stateful (it keeps the robot's track of what it has seen).
 
 Units: metres, m/s, radians. Arrays are float32.
 """
@@ -41,6 +44,11 @@ class Observation(ABC):
     @abstractmethod
     def build(self, world) -> dict[str, np.ndarray]:
         """Batched observation of ``world`` (a :class:`~crowdbench.worlds.CrowdWorld`)."""
+
+    def reward(self, obs: dict[str, np.ndarray]) -> np.ndarray | None:
+        """Optional: a training reward term ``(B,)`` computed from what this observation shows (added to the world's
+        reward on the steps that did not end the episode; AIG-GST's prediction-intrusion penalty). ``None``: none."""
+        return None
 
 
 OBSERVATIONS: Registry[Observation] = Registry("robot observation", "crowdbench.observations")
@@ -125,8 +133,12 @@ def human_observations(world, b: int) -> dict[str, np.ndarray]:
     return {"self": me, "neighbors": nb, "mask": mask}
 
 
-def make_observation(name: str, config: WorldConfig) -> Observation:
-    """Robot observation builder by registry name."""
+OBSERVATIONS.register("predicted", "crowdbench.predictors.observation:PredictedObservation")
+
+
+def make_observation(name: str, config: WorldConfig, **kwargs) -> Observation:
+    """Robot observation builder by registry name (``kwargs``: the builder's options, e.g. ``predicted``'s
+    ``predictor``)."""
     if not isinstance(name, str):
         raise ValueError(f"observation={name!r}; valid choices: {', '.join(OBSERVATIONS.names())}")
-    return OBSERVATIONS.get(name)(config)
+    return OBSERVATIONS.make(name, config=config, **kwargs) if kwargs else OBSERVATIONS.get(name)(config)

@@ -38,6 +38,10 @@ class PPOMethod(ABC):
     """:class:`~crowdbench.training.config.TrainConfig` fields of the method's own recipe (applied by
     :meth:`TrainConfig.for_method <crowdbench.training.config.TrainConfig.for_method>` and ``crowdbench train``)."""
 
+    def observation_kwargs(self, model: Any) -> dict[str, Any]:
+        """Options of the :attr:`observation` builder for architecture ``model`` (default: none)."""
+        return {}
+
     @abstractmethod
     def actor_cfg(self, model: Any) -> dict[str, Any]:
         """Keyword arguments of :attr:`actor_class` for architecture ``model``."""
@@ -58,3 +62,4 @@ class PPOMethod(ABC):
 PPO_METHODS: Registry[PPOMethod] = Registry("PPO method", "crowdbench.ppo_methods")
 PPO_METHODS.register("h2int", "crowdbench.policies.h2int.training:H2INTMethod")
 PPO_METHODS.register("dsrnn", "crowdbench.policies.dsrnn.training:DSRNNMethod")
+PPO_METHODS.register("aig", "crowdbench.policies.aig.training:AIGMethod")

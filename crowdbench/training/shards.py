@@ -15,7 +15,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import pickle
 import traceback
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from multiprocessing.connection import Connection
 from typing import Any
 
@@ -36,6 +36,8 @@ class ShardSpec:
     human_model: str
     human_model_kwargs: dict[str, Any]
     observation: str = "relative"
+    observation_kwargs: dict[str, Any] = field(default_factory=dict)
+    """Options of the observation builder (e.g. ``predicted``'s predictor)."""
 
 
 @dataclass
@@ -58,7 +60,7 @@ class Shard:
     def __init__(self, spec: ShardSpec, streams: list[np.random.SeedSequence]) -> None:
         self.world = CrowdWorld(spec.config, spec.num_worlds, spec.layout, spec.human_model,
                                 spec.human_model_kwargs)
-        self.obs_builder = make_observation(spec.observation, spec.config)
+        self.obs_builder = make_observation(spec.observation, spec.config, **spec.observation_kwargs)
         self.streams = [np.random.default_rng(s) for s in streams]
         self.last_obs: dict[str, np.ndarray] = {}
         self.policy: Any = None
@@ -96,7 +98,11 @@ class Shard:
         if done.any():
             self._set_rho(rho)
             self._reset(done)
-        return StepOut(res.reward, res.terminated, res.truncated, res.outcome, *self.observe())
+        obs, counters = self.observe()
+        reward, extra = res.reward, self.obs_builder.reward(obs)
+        if extra is not None:  # the observation's own term (AIG-GST), on steps that did not end an episode
+            reward = reward + np.where(done, 0.0, extra)
+        return StepOut(reward, res.terminated, res.truncated, res.outcome, obs, counters)
 
     def observe(self) -> tuple[dict[str, np.ndarray], np.ndarray]:
         """Robot observations and the episode step counters."""

@@ -38,20 +38,23 @@ class CrowdVecEnv(VecEnv):
         start_method: Worker-process start method (default: ``fork`` where available, else ``spawn``).
         layout, human_model, human_model_kwargs: As for :class:`~crowdbench.worlds.CrowdWorld`.
         observation: The robot observation the policy reads (:data:`crowdbench.robots.OBSERVATIONS`).
+        observation_kwargs: Its builder's options (e.g. ``predicted``'s ``predictor``).
         **world_options: :class:`~crowdbench.config.WorldConfig` fields (e.g. ``humans_range=(10, 30)``).
     """
 
     def __init__(self, num_envs: int = 128, seed: int = 0, curriculum: Curriculum | None = None,
                  layout: str = "circle_crossing", human_model: str = "responsive_orca",
                  human_model_kwargs: dict | None = None, reward_scale: float = 1.0, processes: int = 1,
-                 start_method: str | None = None, observation: str = "relative", **world_options: Any) -> None:
+                 start_method: str | None = None, observation: str = "relative",
+                 observation_kwargs: dict[str, Any] | None = None, **world_options: Any) -> None:
         if processes < 1:
             raise ValueError(f"processes={processes}; valid choices: 1 (this process) or ≥ 2 (worker processes)")
         self.reward_scale = reward_scale
         self.curriculum = curriculum or Curriculum(enabled=False)
         kwargs = {"responsiveness": self.curriculum.rho, **(human_model_kwargs or {})}
         self.config = make_config(**world_options)
-        spec = ShardSpec(self.config, num_envs, layout, human_model, kwargs, observation=observation)
+        spec = ShardSpec(self.config, num_envs, layout, human_model, kwargs, observation=observation,
+                         observation_kwargs=dict(observation_kwargs or {}))
         self.worlds = ShardedWorlds(spec, seed, processes, local=processes == 1, start_method=start_method)
         self.groups = self.worlds.slices
         """The world slices stepped by each process (one slice when ``processes == 1``)."""

@@ -1,0 +1,162 @@
+"""AIG-GST (Liu et al. 2023, "Intention Aware Robot Crowd Navigation with Attention-Based Interaction Graph"), as in
+Shuijing725/CrowdNav_Prediction_AttnGraph ``rl/networks/selfAttn_srnn_temp_node.py``.
+
+Per step, from the ``predicted`` observation (pedestrians in view, nearest first, each with its current and 5
+predicted positions relative to the robot — :mod:`crowdbench.predictors.observation`):
+
+* **robot**: [v_x, v_y ‖ p_x, p_y, r, g_x, g_y, v_pref, θ] → Linear(9→256)+ReLU;
+* **human–human attention**: spatial edges (12) → Linear(12→128)+ReLU → Linear(128→512)+ReLU, separate q/k/v
+  Linear(512→512), ``nn.MultiheadAttention(512, 8)`` with a key-padding mask (pedestrians not in view), then
+  Linear(512→256)+ReLU;
+* **robot–human attention**: Linear(256→64) on the robot embedding (query) and on each pedestrian's (keys), dot
+  products scaled by ``slots / √64`` (the original's ``num_edges / √attention_size``), softmax over those in view,
+  the weighted sum of the pedestrian embeddings (256) — nothing attended when nobody is in view (the original
+  attends a padded dummy then);
+* **node**: [robot 256 → Linear(→64)+ReLU ‖ attended 256 → Linear(→64)+ReLU] → GRU(128→128) → Linear(128→256),
+  the latent of the actor and critic heads (256→256→256, tanh), as DS-RNN.
+
+The encoder (everything before the GRU) is :meth:`AIGActor.encode_samples`, so the generic trunk
+(:class:`~crowdbench.training.models.RecurrentTrunkActor`) trains it; only the GRU's output layer is added
+(:class:`GRUWithOutput`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import torch
+from rsl_rl.modules import RNN
+from tensordict import TensorDict
+from torch import nn
+
+from crowdbench.training.models import RecurrentTrunkActor
+
+
+@dataclass(frozen=True)
+class AIGConfig:
+    """AIG-GST's architecture (the original's sizes) and the predictor its observation runs."""
+
+    robot_embed: int = 256
+    """Robot embedding width (Linear(9→·)+ReLU) [-]."""
+    edge_dims: tuple[int, ...] = (128, 512)
+    """Spatial-edge embedding 12 → … (ReLU after each); the last is the self-attention width [-]."""
+    heads: int = 8
+    """Human–human attention heads [-]."""
+    human_embed: int = 256
+    """Width after the self-attention (Linear(·)+ReLU) [-]."""
+    attention: int = 64
+    """Robot–human attention projection width [-]."""
+    node_embed: int = 64
+    """Robot and attended-edge embeddings into the node GRU, each [-]."""
+    node_rnn: int = 128
+    """Node GRU state size [-]."""
+    latent: int = 256
+    """Node output width (the latent the heads read) [-]."""
+    head_dims: tuple[int, ...] = (256, 256)
+    """Hidden widths of the actor and critic heads (tanh) [-]."""
+    action_std: float = 1.0
+    """Initial standard deviation of the Gaussian policy (learned, state-independent) [m/s]."""
+    predictor: str = "gst"
+    """Trajectory predictor of the ``predicted`` observation: ``gst`` (learned), ``const_vel`` or ``truth``."""
+    predictor_checkpoint: str = "gst"
+    """The ``gst`` predictor's checkpoint (path or shipped name)."""
+
+    def actor_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :class:`AIGActor` (and rsl-rl's ``actor`` config)."""
+        return {"config": self, "hidden_dims": list(self.head_dims), "activation": "tanh",
+                "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": self.action_std,
+                                     "learn_std": True}}
+
+    def observation_kwargs(self) -> dict[str, Any]:
+        """Options of the ``predicted`` observation this network reads."""
+        if self.predictor == "gst":
+            return {"predictor": "gst", "checkpoint": self.predictor_checkpoint}
+        return {"predictor": self.predictor}
+
+
+class GRUWithOutput(RNN):
+    """rsl-rl's one-layer GRU followed by a Linear output layer (AIG-GST's node RNN: GRU(128→128) → Linear(128→256)).
+    Same interface as :class:`rsl_rl.modules.RNN`; the carried state is the GRU's."""
+
+    def __init__(self, input_size: int, hidden_size: int, output_size: int) -> None:
+        super().__init__(input_size, hidden_size, 1, "gru")
+        self.out = nn.Linear(hidden_size, output_size)
+
+    def forward(self, input: torch.Tensor, masks: torch.Tensor | None = None,  # noqa: A002 - rsl-rl's name
+                hidden_state: torch.Tensor | None = None) -> torch.Tensor:
+        return self.out(super().forward(input, masks, hidden_state))
+
+
+class AIGActor(RecurrentTrunkActor):
+    """rsl-rl actor: AIG-GST's attention encoder → node GRU → tanh MLP head → Gaussian mean.
+
+    Observation groups (``predicted``): ``robot`` ``(·, 9)``, ``humans`` ``(·, N_max, 12)`` nearest first, ``mask``
+    ``(·, N_max)``.
+    """
+
+    obs_keys = ("robot", "humans", "mask")
+
+    def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int,
+                 config: AIGConfig | None = None, hidden_dims: tuple[int, ...] | list[int] = (256, 256),
+                 activation: str = "tanh", distribution_cfg: dict | None = None) -> None:
+        self.aig = cfg = config or AIGConfig()
+        self.slots, self.edge_dim = obs["humans"].shape[-2], obs["humans"].shape[-1]
+        super().__init__(obs, obs_groups, obs_set, output_dim, 2 * cfg.node_embed, cfg.latent, hidden_dims,
+                         activation, distribution_cfg)
+        width = cfg.edge_dims[-1]
+        self.robot_embed = nn.Sequential(nn.Linear(9, cfg.robot_embed), nn.ReLU())
+        dims = (self.edge_dim, *cfg.edge_dims)
+        self.edge_embed = nn.Sequential(*[m for a, b in zip(dims[:-1], dims[1:], strict=True)
+                                          for m in (nn.Linear(a, b), nn.ReLU())])
+        self.q, self.k, self.v = (nn.Linear(width, width) for _ in range(3))
+        self.self_attn = nn.MultiheadAttention(width, cfg.heads, batch_first=True)
+        self.human_out = nn.Sequential(nn.Linear(width, cfg.human_embed), nn.ReLU())
+        self.query = nn.Linear(cfg.robot_embed, cfg.attention)
+        self.key = nn.Linear(cfg.human_embed, cfg.attention)
+        self.robot_node = nn.Sequential(nn.Linear(cfg.robot_embed, cfg.node_embed), nn.ReLU())
+        self.edge_node = nn.Sequential(nn.Linear(cfg.human_embed, cfg.node_embed), nn.ReLU())
+
+    def make_rnn(self, z_dim: int, latent: int) -> nn.Module:
+        return GRUWithOutput(z_dim, self.aig.node_rnn, latent)
+
+    @property
+    def state_size(self) -> int:
+        return self.aig.node_rnn
+
+    def step(self, z: torch.Tensor, state: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        out, nxt = self.rnn.rnn(z.unsqueeze(0), state)
+        return self.rnn.out(out.squeeze(0)), nxt
+
+    def encode_samples(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        """The node GRU's input ``(n, 128)`` from ``robot`` ``(n, 9)``, ``humans`` ``(n, N_max, 12)`` and ``mask``
+        ``(n, N_max)`` (nearest first: truncated to the batch's most pedestrians in view, exact under the masks)."""
+        robot, mask = obs["robot"], obs["mask"] > 0.5
+        n = robot.shape[0]
+        r = self.robot_embed(torch.cat([robot[:, 7:9], robot[:, :7]], -1))
+        attended = r.new_zeros(n, self.aig.human_embed)
+        k = int(mask.sum(-1).max()) if n else 0
+        rows = mask[:, 0]  # someone in view (nearest first)
+        if k:
+            m = mask[rows, :k]
+            e = self.edge_embed(obs["humans"][rows, :k])
+            z, _ = self.self_attn(self.q(e), self.k(e), self.v(e), key_padding_mask=~m, need_weights=False)
+            h = self.human_out(z)
+            score = (self.key(h) @ self.query(r[rows]).unsqueeze(-1)).squeeze(-1)
+            score = score * (self.slots / math.sqrt(self.aig.attention))
+            w = torch.softmax(score.masked_fill(~m, -torch.inf), dim=-1)
+            attended = attended.index_put((rows.nonzero().squeeze(-1),), (w.unsqueeze(-1) * h).sum(1))
+        return torch.cat([self.robot_node(r), self.edge_node(attended)], -1)
+
+    def work(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        """Encoding cost grows with the pedestrians in view (quadratically in the self-attention)."""
+        return 1.0 + obs["mask"].sum(-1).float().square() / 16.0
+
+
+def build_actor(model: AIGConfig, n_max: int, horizon: int = 5) -> AIGActor:
+    """An untrained actor of architecture ``model`` for ``n_max`` observation slots."""
+    obs = TensorDict({"robot": torch.zeros(1, 9), "humans": torch.zeros(1, n_max, 2 + 2 * horizon),
+                      "mask": torch.zeros(1, n_max)}, batch_size=[1])
+    return AIGActor(obs, {"actor": ["robot"], "critic": ["robot"]}, "actor", 2, **model.actor_kwargs())

@@ -1,0 +1,55 @@
+"""AIG-GST as a crowdbench robot policy: a trained checkpoint (``crowdbench train aig``) driving the robot.
+
+Deterministic (the Gaussian's mean), one node-GRU state per world, on the ``predicted`` observation with the
+predictor the checkpoint was trained with (:attr:`AIGPolicy.observation_kwargs`).
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+from crowdbench import checkpoints
+from crowdbench.config import WorldConfig
+from crowdbench.policies.aig.model import AIGActor, AIGConfig, build_actor
+from crowdbench.policies.base import register
+from crowdbench.policies.recurrent import RecurrentActorPolicy
+
+METHOD = "aig"
+
+
+def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[AIGActor, dict[str, Any]]:
+    """The actor of a checkpoint (path or shipped name; ``None``: the shipped ``aig``) in eval mode, and the
+    checkpoint's metadata."""
+    path = checkpoints.resolve(METHOD, checkpoint)
+    ckpt = checkpoints.load(path, METHOD)
+    model = {k: tuple(v) if isinstance(v, list) else v for k, v in dict(ckpt["model"]).items()}
+    actor = build_actor(AIGConfig(**model), int(ckpt["n_max"]))
+    actor.load_state_dict(ckpt["actor"])
+    meta = {k: ckpt.get(k) for k in ("iteration", "env_steps", "seed")}
+    return actor.eval(), {**meta, "path": path}
+
+
+@register(METHOD)
+class AIGPolicy(RecurrentActorPolicy):
+    """The trained AIG-GST policy.
+
+    Args:
+        config: World configuration (``max_humans_observed`` must equal the checkpoint's slot count).
+        checkpoint: Path or shipped name (default: the shipped ``aig``).
+        actor: Alternatively a live :class:`~crowdbench.policies.aig.model.AIGActor` (evaluation during training).
+    """
+
+    observation = "predicted"
+
+    def __init__(self, config: WorldConfig | None = None, checkpoint: str | None = None,
+                 actor: AIGActor | None = None) -> None:
+        meta: dict[str, Any] = {}
+        if actor is None:
+            actor, meta = load_actor(checkpoint)
+        self.model_config = actor.aig
+        super().__init__(config, actor, actor.slots, meta)
+
+    @property
+    def observation_kwargs(self) -> dict[str, Any]:
+        return self.model_config.observation_kwargs()

@@ -1,0 +1,47 @@
+"""How ``crowdbench train aig`` builds AIG-GST: its PPO method binding and recipe
+(:class:`~crowdbench.training.methods.PPOMethod`).
+
+The recipe is DS-RNN's (:mod:`crowdbench.policies.dsrnn.training`; CrowdNav++ trains both with the same PPO
+settings, 16 processes instead of 12): Adam at a fixed 4e-5, 5 epochs, clip 0.2, gradient norm 0.5, no entropy bonus,
+γ 0.99, λ 0.95, value loss weight 0.25 on rsl-rl's squared error, 192 worlds × 30 steps in 32 mini-batches. The
+crowd stays at ρ = 0 (the original's invisible robot; no curriculum). The reward is crowdbench's paper reward plus
+the prediction-intrusion penalty of the ``predicted`` observation
+(:meth:`~crowdbench.predictors.observation.PredictedObservation.reward`), both scaled by ``reward_scale``.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+from crowdbench.policies.aig.model import AIGActor, AIGConfig
+from crowdbench.training.methods import PPOMethod
+
+
+class AIGMethod(PPOMethod):
+    """AIG-GST (Liu et al. 2023)."""
+
+    name = "aig"
+    model_config = AIGConfig
+    actor_class = AIGActor
+    observation = "predicted"
+    train_defaults: ClassVar[dict[str, Any]] = {
+        "learning_rate": 4e-5, "schedule": "fixed", "epochs": 5, "clip": 0.2, "max_grad_norm": 0.5,
+        "entropy_coef": 0.0, "gamma": 0.99, "lam": 0.95, "value_loss_coef": 0.25, "num_envs": 192,
+        "steps_per_env": 30, "mini_batches": 32, "anneal": False, "rho_min": 0.0}
+
+    def observation_kwargs(self, model: AIGConfig) -> dict[str, Any]:
+        return model.observation_kwargs()
+
+    def actor_cfg(self, model: AIGConfig) -> dict[str, Any]:
+        return model.actor_kwargs()
+
+    def critic_cfg(self, model: AIGConfig) -> dict[str, Any]:
+        return {"hidden_dims": list(model.head_dims), "activation": "tanh"}
+
+    def policy(self, config: Any, actor: AIGActor) -> Any:
+        from crowdbench.policies.aig.policy import AIGPolicy
+
+        return AIGPolicy(config, actor=actor)
+
+    def label(self, model: AIGConfig) -> str:
+        return self.name if model.predictor == "gst" else f"{self.name}-{model.predictor}"

@@ -1,0 +1,98 @@
+"""AIG-GST's network: what it attends to (only pedestrians in view, no slot order, nobody in view is fine), the
+original's sizes, and training through crowdbench's PPO path with the intrusion penalty in the reward."""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from tensordict import TensorDict
+
+from crowdbench.policies.aig.model import AIGConfig, build_actor
+
+K = 6
+
+
+def _obs(n: int, g: torch.Generator, visible: float = 0.6) -> dict[str, torch.Tensor]:
+    count = (torch.rand(n, generator=g) * (K + 1) * visible).long().clamp(max=K)
+    mask = (torch.arange(K)[None] < count[:, None]).float()  # nearest first: a prefix
+    humans = torch.randn(n, K, 12, generator=g) * 3 * mask.unsqueeze(-1)
+    return {"robot": torch.randn(n, 9, generator=g), "humans": humans, "mask": mask}
+
+
+def test_encoder_sees_only_pedestrians_in_view_and_no_slot_order():
+    torch.manual_seed(0)
+    actor = build_actor(AIGConfig(), K).eval()
+    g = torch.Generator().manual_seed(1)
+    obs = _obs(16, g)
+    obs["mask"][0] = 0.0
+    obs["humans"][0] = 0.0  # nobody in view
+    with torch.no_grad():
+        z = actor.encode_samples(obs)
+        assert torch.isfinite(z).all()
+        hidden = obs["mask"] < 0.5
+        other = {**obs, "humans": torch.where(hidden.unsqueeze(-1), 9.0, obs["humans"])}
+        torch.testing.assert_close(actor.encode_samples(other), z)  # what is out of view does not matter
+        # the pedestrians in view in another order (self-attention and pooling have no order)
+        perm_obs = {k: v.clone() for k, v in obs.items()}
+        for i in range(16):
+            c = int(obs["mask"][i].sum())
+            p = torch.randperm(c, generator=g)
+            perm_obs["humans"][i, :c] = obs["humans"][i, p]
+        torch.testing.assert_close(actor.encode_samples(perm_obs), z, rtol=1e-4, atol=1e-5)
+
+
+def test_sizes_are_the_originals():
+    actor = build_actor(AIGConfig(), 20)
+    assert actor.self_attn.embed_dim == 512 and actor.self_attn.num_heads == 8
+    assert [m.out_features for m in actor.edge_embed if isinstance(m, torch.nn.Linear)] == [128, 512]
+    assert actor.robot_embed[0].in_features == 9 and actor.robot_embed[0].out_features == 256
+    assert actor.rnn.rnn.hidden_size == 128 and actor.rnn.out.out_features == 256
+    obs = TensorDict({k: v for k, v in _obs(4, torch.Generator().manual_seed(2)).items()}, batch_size=[4])
+    obs["humans"] = torch.zeros(4, 20, 12)
+    obs["mask"] = torch.zeros(4, 20)
+    with torch.no_grad():
+        assert actor(obs).shape == (4, 2)
+
+
+def test_trains_with_the_intrusion_penalty_and_drives_a_robot(tmp_path):
+    from crowdbench.config import WorldConfig
+    from crowdbench.evaluation import run_episodes
+    from crowdbench.policies.aig.policy import AIGPolicy, load_actor
+    from crowdbench.training.config import TrainConfig
+    from crowdbench.training.shards import Shard, ShardSpec
+    from crowdbench.training.trainer import train
+
+    # the shard adds the observation's penalty to the world's reward on steps that did not end an episode
+    spec = ShardSpec(WorldConfig(num_humans=12), 4, "circle_crossing", "responsive_orca", {}, "predicted",
+                     {"predictor": "const_vel", "intrusion_distance": 2.0})
+    shard = Shard(spec, [np.random.SeedSequence(i) for i in range(4)])
+    shard.reset_all(0.0)
+    found = False
+    for _ in range(60):
+        steps = shard.world.steps.copy()
+        world_reward = []
+        orig = shard.world.step
+
+        def spy(a, _orig=orig, _out=world_reward):
+            res = _orig(a)
+            _out.append((res.reward.copy(), res.terminated | res.truncated))
+            return res
+
+        shard.world.step = spy
+        out = shard.step(np.tile([[0.0, 1.0]], (4, 1)), steps + 1, 0.0)
+        base, done = world_reward[0]
+        extra = shard.obs_builder.reward(out.obs)
+        np.testing.assert_allclose(out.reward, base + np.where(done, 0.0, extra))
+        found |= bool((extra[~done] < 0).any())
+    assert found  # some predicted positions came within 2 m of the robot: penalised
+
+    cfg = TrainConfig.for_method("aig", model={"predictor": "const_vel"}, num_envs=8, steps_per_env=8,
+                                 mini_batches=2, iterations=2, threads=1, env_processes=1, eval_every=0,
+                                 humans_range=(2, 4))
+    tr = train(cfg, str(tmp_path), quiet=True)
+    assert tr.iteration == 2
+    actor, meta = load_actor(str(tmp_path / "last.pt"))
+    policy = AIGPolicy(WorldConfig(), actor=actor)
+    assert policy.observation_kwargs == {"predictor": "const_vel"} and meta["iteration"] == 2
+    episodes = run_episodes(policy, 4, num_worlds=2, num_humans=5)
+    assert len(episodes) == 4 and all(e.outcome in ("success", "collision", "timeout") for e in episodes)
