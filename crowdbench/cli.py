@@ -130,7 +130,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         cfg = resume_config(path, **speed)
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
-        model = {"variant": args.variant} if args.variant is not None else None
+        model = method.variant_model(args.variant) if args.variant is not None else None
         overrides = {"model": model, "seed": args.seed, **speed}
         if args.no_anneal:
             overrides["anneal"] = False
@@ -381,7 +381,8 @@ def main(argv: list[str] | None = None) -> int:
     p.set_defaults(func=evaluate)
     p = sub.add_parser("train", help="train a learned policy: H²INT (rsl-rl PPO), CADRL or SARL (value learning)")
     p.add_argument("algo", metavar="METHOD", help="h2int (or another registered PPO method), cadrl or sarl")
-    p.add_argument("--variant", default=None, help="h2int architecture: h2int (default), flat, meanpool or standard")
+    p.add_argument("--variant", default=None, help="architecture: h2int: h2int (default), flat, meanpool or standard; "
+                        "dsrnn, aig: original (default) or small")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
     p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")

@@ -38,6 +38,18 @@ class PPOMethod(ABC):
     """:class:`~crowdbench.training.config.TrainConfig` fields of the method's own recipe (applied by
     :meth:`TrainConfig.for_method <crowdbench.training.config.TrainConfig.for_method>` and ``crowdbench train``)."""
 
+    variants: ClassVar[dict[str, dict[str, Any]]] = {}
+    """Named architectures as :attr:`model_config` field overrides (``crowdbench train METHOD --variant NAME``); a
+    method without any takes ``--variant`` as its config's own ``variant`` field (H²INT's ablations)."""
+
+    def variant_model(self, name: str) -> dict[str, Any]:
+        """The ``model`` fields of variant ``name``."""
+        if not self.variants:
+            return {"variant": name}
+        if name not in self.variants:
+            raise ValueError(f"--variant {name!r} for {self.name}; valid choices: {', '.join(self.variants)}")
+        return dict(self.variants[name])
+
     def observation_kwargs(self, model: Any) -> dict[str, Any]:
         """Options of the :attr:`observation` builder for architecture ``model`` (default: none)."""
         return {}
@@ -55,7 +67,11 @@ class PPOMethod(ABC):
         """The deterministic :class:`~crowdbench.policies.RobotPolicy` of a live ``actor`` (quick evaluations)."""
 
     def label(self, model: Any) -> str:
-        """Short name of a run's architecture (plots, default run folder)."""
+        """Short name of a run's architecture (plots, default run folder): the method, and the variant it matches
+        unless that is the first (default) one."""
+        for i, (name, fields) in enumerate(self.variants.items()):
+            if i and all(getattr(model, k) == (tuple(v) if isinstance(v, list) else v) for k, v in fields.items()):
+                return f"{self.name}-{name}"
         return self.name
 
 

@@ -96,3 +96,21 @@ def test_trains_with_the_intrusion_penalty_and_drives_a_robot(tmp_path):
     assert policy.observation_kwargs == {"predictor": "const_vel"} and meta["iteration"] == 2
     episodes = run_episodes(policy, 4, num_worlds=2, num_humans=5)
     assert len(episodes) == 4 and all(e.outcome in ("success", "collision", "timeout") for e in episodes)
+
+
+def test_named_widths_of_the_recurrent_baselines():
+    import pytest
+
+    from crowdbench.training.config import TrainConfig
+    from crowdbench.training.methods import PPO_METHODS
+
+    aig = PPO_METHODS.get("aig")()
+    small = TrainConfig.for_method("aig", model=aig.variant_model("small")).model
+    assert aig.label(small) == "aig-small" and aig.label(AIGConfig()) == "aig"
+    actor = build_actor(small, K)
+    assert actor.self_attn.embed_dim == 128 and sum(p.numel() for p in actor.parameters()) < 250_000
+    dsrnn = PPO_METHODS.get("dsrnn")()
+    assert dsrnn.label(TrainConfig.for_method("dsrnn", model=dsrnn.variant_model("small")).model) == "dsrnn-small"
+    with pytest.raises(ValueError, match="valid choices: original, small"):
+        aig.variant_model("huge")
+    assert PPO_METHODS.get("h2int")().variant_model("flat") == {"variant": "flat"}

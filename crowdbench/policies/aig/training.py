@@ -29,6 +29,13 @@ class AIGMethod(PPOMethod):
         "entropy_coef": 0.0, "gamma": 0.99, "lam": 0.95, "value_loss_coef": 0.25, "num_envs": 192,
         "steps_per_env": 30, "mini_batches": 32, "anneal": False, "rho_min": 0.0}
 
+    variants: ClassVar[dict[str, dict[str, Any]]] = {
+        "original": {},
+        "small": {"robot_embed": 64, "edge_dims": (64, 128), "heads": 4, "human_embed": 64, "attention": 32,
+                  "node_embed": 32, "node_rnn": 64, "latent": 64, "head_dims": (64, 64)}}
+    """``small``: every width ÷ 4 (self-attention 128 × 4 heads, GRU 64; 0.18 M parameters instead of 2.37 M), about
+    8× cheaper per update on this CPU."""
+
     def observation_kwargs(self, model: AIGConfig) -> dict[str, Any]:
         return model.observation_kwargs()
 
@@ -44,4 +51,5 @@ class AIGMethod(PPOMethod):
         return AIGPolicy(config, actor=actor)
 
     def label(self, model: AIGConfig) -> str:
-        return self.name if model.predictor == "gst" else f"{self.name}-{model.predictor}"
+        base = super().label(model)
+        return base if model.predictor == "gst" else f"{base}-{model.predictor}"
