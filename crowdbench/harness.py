@@ -301,12 +301,40 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
         write_text(os.path.join(out, f"{e.slug}.json"),
                    json.dumps({"meta": meta, "results": rows}, indent=2) + "\n")
         write_text(os.path.join(out, f"{e.slug}.md"), markdown(rows))
-    groups = {e.label: e.group for e in entries}
+    everyone, groups = gather(out, suite, board, {e.label: e.group for e in entries})
     write_text(os.path.join(out, "LEADERBOARD.md"),
-               leaderboard_markdown(board, groups, suite.episodes, suite.seed, suite=suite.name))
+               leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name))
     if {"I", "II"} & set(suite.tables):
-        plot_board(board, os.path.join(out, "success.png"), groups)
+        plot_board(everyone, os.path.join(out, "success.png"), groups)
     return board
+
+
+def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], groups: dict[str, str]
+           ) -> tuple[dict[str, list[dict[str, Any]]], dict[str, str]]:
+    """The run's ``board`` plus every other method file in ``out`` scored on the same suite (same digest), so a run
+    of some methods leaves the others on ``LEADERBOARD.md``; in leaderboard order (:data:`~crowdbench.leaderboard.
+    METHODS`, each method's other training seeds after it, then the rest by label). Returns rows and groups."""
+    from crowdbench.leaderboard import METHODS
+
+    rows, groups = {}, dict(groups)
+    for path in sorted(Path(out).glob("*.json")):
+        try:
+            d = json.loads(path.read_text())
+        except (OSError, ValueError):
+            continue
+        meta = d.get("meta") if isinstance(d, dict) else None
+        if isinstance(meta, dict) and meta.get("suite_digest") == suite.digest() and "label" in meta:
+            rows[meta["label"]] = d["results"]
+            groups.setdefault(meta["label"], meta.get("group", "main"))
+    rows.update(board)
+    order = [m.label for m in METHODS]
+
+    def key(label: str) -> tuple[int, int, str]:
+        group = groups.get(label, "main")
+        base = (group.split(":", 1)[1] if ":" in group else "h2int") if group.startswith("seeds") else label
+        return (order.index(base) if base in order else len(order), base != label, label)
+
+    return {lb: rows[lb] for lb in sorted(rows, key=key)}, groups
 
 
 def print_progress(line: str) -> None:

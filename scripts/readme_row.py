@@ -11,7 +11,8 @@ from collections import defaultdict
 
 
 def row(slug: str) -> str:
-    res = json.load(open(f"leaderboards/{slug}.json"))["results"]
+    with open(f"leaderboards/{slug}.json") as f:
+        res = json.load(f)["results"]
     by = {(r["table"], r["row"], r.get("layout")): r for r in res}
     t1 = [by[("I", k, "circle_crossing")] for k in ("High", "Medium", "Low")]
     t2 = [by[("II", k, "circle_crossing")] for k in ("N=10", "N=20", "N=30")]

@@ -120,6 +120,12 @@ def test_workers_give_identical_files(tmp_path):
     for name in ("orca.json", "social_force.json"):
         assert stable(tmp_path / "one" / name) == stable(tmp_path / "two" / name)
     assert (tmp_path / "one" / "LEADERBOARD.md").read_text() == (tmp_path / "two" / "LEADERBOARD.md").read_text()
+    # running one method at a time gathers the same board (every method file of the suite in the folder)
+    harness.run(suite(), entries[1:], str(tmp_path / "three"))
+    harness.run(suite(), entries[:1], str(tmp_path / "three"))
+    assert (tmp_path / "three" / "LEADERBOARD.md").read_text() == (tmp_path / "one" / "LEADERBOARD.md").read_text()
+    harness.run(suite(episodes=3), entries[:1], str(tmp_path / "three"))  # another suite: not mixed in
+    assert "| social_force |" not in (tmp_path / "three" / "LEADERBOARD.md").read_text()
 
 
 def test_a_killed_run_resumes_without_losing_or_recomputing_a_cell(tmp_path):
