@@ -111,6 +111,10 @@ def test_fast_path_equals_the_reference_values_and_gradients(method):
     # padding never matters: garbage in the masked slots leaves the values unchanged
     y = torch.where(mask.unsqueeze(-1), x, torch.full_like(x, 1e3))
     torch.testing.assert_close(net(y, mask), fast)
+    # every slot filled (one robot's look-ahead): the dense branch equals the masked one bit for bit
+    full = torch.ones(40, 9, dtype=torch.bool)
+    padded = net(torch.cat([x, torch.zeros(40, 1, 13)], 1), torch.cat([full, torch.zeros(40, 1, dtype=torch.bool)], 1))
+    assert torch.equal(net(x, full), padded)
 
 
 def test_architectures_are_the_papers():

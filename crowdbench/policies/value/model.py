@@ -68,6 +68,8 @@ class CADRLNet(nn.Module):
 
     def forward(self, state: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         """Values ``(S,)`` of joint states ``(S, K, 13)`` with valid slots ``mask`` ``(S, K)``."""
+        if bool(mask.all()):  # one robot's look-ahead: every slot holds a pedestrian
+            return self.value(state).squeeze(-1).amin(dim=1)
         pair = state.new_full(mask.shape, torch.inf)
         pair[mask] = self.value(state[mask]).squeeze(-1)
         return pair.amin(dim=1)
@@ -99,23 +101,28 @@ class SARLNet(nn.Module):
         """Values ``(S,)`` of joint states ``(S, K, 13)`` with valid slots ``mask`` ``(S, K)``."""
         S, K, _ = state.shape
         d = self.cfg.mlp1_dims[-1]
-        rows = state[mask]  # (R, 13): only the pedestrians that exist
+        # one robot's look-ahead fills every slot (K = the pedestrians it senses): the same arithmetic without the
+        # gathers and scatters (13 % of a decision, bitwise equal)
+        dense = bool(mask.all())
+
+        def spread(x: torch.Tensor) -> torch.Tensor:  # per-pedestrian rows (R, ·) → (S, K, ·), zeros elsewhere
+            if dense:
+                return x.view(S, K, *x.shape[1:])
+            out = x.new_zeros(S, K, *x.shape[1:])
+            out[mask] = x
+            return out
+
+        rows = state.reshape(S * K, -1) if dense else state[mask]  # (R, 13): only the pedestrians that exist
         h = self.mlp1(rows)
-        emb = state.new_zeros(S, K, d)
-        emb[mask] = h
-        mean = emb.sum(dim=1) / mask.sum(dim=1, keepdim=True)
+        mean = spread(h).sum(dim=1) / mask.sum(dim=1, keepdim=True)
         # the score MLP's first layer on [h ‖ mean] = W_h·h + (W_g·mean + b): the mean's half once per state
         first = self.attention[0]
         w_h, w_g = first.weight[:, :d], first.weight[:, d:]
         per_state = nn.functional.linear(mean, w_g, first.bias)  # (S, A1)
-        seg = torch.arange(S).unsqueeze(1).expand(S, K)[mask]
+        seg = torch.arange(S).repeat_interleave(K) if dense else torch.arange(S).unsqueeze(1).expand(S, K)[mask]
         z = nn.functional.linear(h, w_h) + per_state[seg]
-        score_rows = self.attention[1:](z).squeeze(-1)
-        score = state.new_zeros(S, K)
-        score[mask] = score_rows
-        feat = state.new_zeros(S, K, self.cfg.mlp2_dims[-1])
-        feat[mask] = self.mlp2(h)
-        return self._pool(state, score, feat, mask)
+        score = spread(self.attention[1:](z).squeeze(-1))
+        return self._pool(state, score, spread(self.mlp2(h)), mask)
 
     def reference(self, state: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         emb = self.mlp1(state) * mask.unsqueeze(-1)
