@@ -86,10 +86,17 @@ class ConstantVelocity(Predictor):
     own observations support without a model. CrowdNav++'s ``const_vel`` reads the simulator's velocities instead."""
 
     def predict(self, track: Track, world) -> np.ndarray:
-        now, prev = track.pos[:, -1], track.pos[:, -2]
-        step = np.where((track.seen[:, -1] & track.seen[:, -2])[..., None], now - prev, 0.0)
-        k = np.arange(1, self.horizon + 1, dtype=np.float64)[:, None]
-        return now[:, :, None, :] + k * step[:, :, None, :]
+        return constant_velocity(track.pos, track.seen, self.horizon)
+
+
+def constant_velocity(pos: np.ndarray, seen: np.ndarray, horizon: int = HORIZON) -> np.ndarray:
+    """Constant-velocity positions ``(S, A, horizon, 2)`` from observed positions ``pos`` ``(S, T, A, 2)`` and
+    ``seen`` ``(S, T, A)`` (a track's layout): the last seen displacement repeated, zero where the previous step was
+    not seen."""
+    now, prev = pos[:, -1], pos[:, -2]
+    step = np.where((seen[:, -1] & seen[:, -2])[..., None], now - prev, 0.0)
+    k = np.arange(1, horizon + 1, dtype=now.dtype)[:, None]
+    return now[:, :, None, :] + k * step[:, :, None, :]
 
 
 @PREDICTORS.register("truth")

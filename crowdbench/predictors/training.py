@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from crowdbench.predictors.base import HORIZON, MAX_STEP, OBSERVED, Track
+from crowdbench.predictors.base import HORIZON, MAX_STEP, OBSERVED, Track, constant_velocity
 
 
 @dataclass(frozen=True)
@@ -145,15 +145,6 @@ def errors(pred: np.ndarray, future: np.ndarray, valid: np.ndarray) -> tuple[flo
     ``(S, A)`` pedestrians."""
     d = np.linalg.norm(pred - future, axis=-1)[valid]  # (n, K)
     return float(d.mean()), float(d[:, -1].mean())
-
-
-def constant_velocity(pos: np.ndarray, seen: np.ndarray, horizon: int = HORIZON) -> np.ndarray:
-    """Constant-velocity predictions ``(S, A, K, 2)`` from observed ``pos`` ``(S, T, A, 2)`` and ``seen``: the
-    last seen displacement repeated (what :class:`~crowdbench.predictors.base.ConstantVelocity` does)."""
-    ok = (seen[:, -1] & seen[:, -2])[..., None]
-    step = np.where(ok, pos[:, -1] - pos[:, -2], 0.0)
-    k = np.arange(1, horizon + 1)[:, None]
-    return pos[:, -1][:, :, None, :] + k * step[:, :, None, :]
 
 
 def compare(data: dict[str, np.ndarray], checkpoint: str | None = None) -> dict[str, tuple[float, float]]:
