@@ -24,7 +24,7 @@ SHIPPED = Path(__file__).resolve().parent / "policies"
 """Shipped checkpoints are package data: ``policies/<method>/checkpoints/<name>.pt``, or the folder
 :data:`FOLDERS` names for methods that share a sub-package."""
 FOLDERS = {"cadrl": SHIPPED / "value" / "checkpoints" / "cadrl", "sarl": SHIPPED / "value" / "checkpoints" / "sarl",
-           "gst": SHIPPED.parent / "predictors" / "checkpoints"}
+           "aig_gst": SHIPPED / "aig" / "checkpoints", "gst": SHIPPED.parent / "predictors" / "checkpoints"}
 
 
 def folder_of(method: str) -> Path:

@@ -77,7 +77,7 @@ def _policy(args: argparse.Namespace, config=None):
     return make_policy(name or "orca", config, **({"checkpoint": args.checkpoint} if args.checkpoint else {}))
 
 
-CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl", "dsrnn", "aig")
+CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl", "dsrnn", "aig_gst")
 """Registered policies known to take ``checkpoint=`` (listed in errors; any policy with the argument accepts it)."""
 
 
@@ -382,7 +382,7 @@ def main(argv: list[str] | None = None) -> int:
     p = sub.add_parser("train", help="train a learned policy: H²INT (rsl-rl PPO), CADRL or SARL (value learning)")
     p.add_argument("algo", metavar="METHOD", help="h2int (or another registered PPO method), cadrl or sarl")
     p.add_argument("--variant", default=None, help="architecture: h2int: h2int (default), flat, meanpool or standard; "
-                        "dsrnn, aig: original (default) or small")
+                        "dsrnn, aig_gst: original (default) or small")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
     p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")

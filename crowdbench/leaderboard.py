@@ -257,7 +257,7 @@ METHODS: tuple[Entry, ...] = (
     Entry("cadrl", "cadrl", (("checkpoint", "cadrl"),)),
     Entry("sarl", "sarl", (("checkpoint", "sarl"),)),
     Entry("dsrnn", "dsrnn", (("checkpoint", "dsrnn"),)),
-    Entry("aig-gst", "aig", (("checkpoint", "aig"),)),
+    Entry("aig_gst", "aig_gst", (("checkpoint", "aig_gst"),)),
     Entry("h2int-flat", "h2int", (("checkpoint", "flat"),), "ablation"),
     Entry("h2int-meanpool", "h2int", (("checkpoint", "meanpool"),), "ablation"),
     Entry("h2int-standard", "h2int", (("checkpoint", "standard"),), "ablation"),

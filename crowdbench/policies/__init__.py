@@ -16,6 +16,6 @@ register("h2int", "crowdbench.policies.h2int.policy:H2INTPolicy")
 register("cadrl", "crowdbench.policies.value.policy:CADRLPolicy")
 register("sarl", "crowdbench.policies.value.policy:SARLPolicy")
 register("dsrnn", "crowdbench.policies.dsrnn.policy:DSRNNPolicy")
-register("aig", "crowdbench.policies.aig.policy:AIGPolicy")
+register("aig_gst", "crowdbench.policies.aig.policy:AIGPolicy")
 
 __all__ = ["POLICIES", "LinearPolicy", "ORCAPolicy", "RobotPolicy", "SocialForcePolicy", "make_policy", "register"]

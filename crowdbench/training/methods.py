@@ -78,4 +78,4 @@ class PPOMethod(ABC):
 PPO_METHODS: Registry[PPOMethod] = Registry("PPO method", "crowdbench.ppo_methods")
 PPO_METHODS.register("h2int", "crowdbench.policies.h2int.training:H2INTMethod")
 PPO_METHODS.register("dsrnn", "crowdbench.policies.dsrnn.training:DSRNNMethod")
-PPO_METHODS.register("aig", "crowdbench.policies.aig.training:AIGMethod")
+PPO_METHODS.register("aig_gst", "crowdbench.policies.aig.training:AIGMethod")

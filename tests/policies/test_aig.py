@@ -86,7 +86,7 @@ def test_trains_with_the_intrusion_penalty_and_drives_a_robot(tmp_path):
         found |= bool((extra[~done] < 0).any())
     assert found  # some predicted positions came within 2 m of the robot: penalised
 
-    cfg = TrainConfig.for_method("aig", model={"predictor": "const_vel"}, num_envs=8, steps_per_env=8,
+    cfg = TrainConfig.for_method("aig_gst", model={"predictor": "const_vel"}, num_envs=8, steps_per_env=8,
                                  mini_batches=2, iterations=2, threads=1, env_processes=1, eval_every=0,
                                  humans_range=(2, 4))
     tr = train(cfg, str(tmp_path), quiet=True)
@@ -104,9 +104,9 @@ def test_named_widths_of_the_recurrent_baselines():
     from crowdbench.training.config import TrainConfig
     from crowdbench.training.methods import PPO_METHODS
 
-    aig = PPO_METHODS.get("aig")()
-    small = TrainConfig.for_method("aig", model=aig.variant_model("small")).model
-    assert aig.label(small) == "aig-small" and aig.label(AIGConfig()) == "aig"
+    aig = PPO_METHODS.get("aig_gst")()
+    small = TrainConfig.for_method("aig_gst", model=aig.variant_model("small")).model
+    assert aig.label(small) == "aig_gst-small" and aig.label(AIGConfig()) == "aig_gst"
     actor = build_actor(small, K)
     assert actor.self_attn.embed_dim == 128 and sum(p.numel() for p in actor.parameters()) < 250_000
     dsrnn = PPO_METHODS.get("dsrnn")()

@@ -215,7 +215,7 @@ def test_train_config_is_frozen_strict_and_round_trips():
         TrainConfig.from_dict({**cfg.to_dict(), "packed": True})
     with pytest.raises(ValueError, match="variant='nope'; valid choices: h2int, flat, meanpool, standard"):
         tiny(model={"variant": "nope"})
-    with pytest.raises(ValueError, match="unknown PPO method 'nope'; valid choices: aig, dsrnn, h2int"):
+    with pytest.raises(ValueError, match="unknown PPO method 'nope'; valid choices: aig_gst, dsrnn, h2int"):
         TrainConfig(method="nope")
     import inspect
 

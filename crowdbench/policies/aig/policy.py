@@ -1,4 +1,4 @@
-"""AIG-GST as a crowdbench robot policy: a trained checkpoint (``crowdbench train aig``) driving the robot.
+"""AIG-GST as a crowdbench robot policy: a trained checkpoint (``crowdbench train aig_gst``) driving the robot.
 
 Deterministic (the Gaussian's mean), one node-GRU state per world, on the ``predicted`` observation with the
 predictor the checkpoint was trained with (:attr:`AIGPolicy.observation_kwargs`).
@@ -15,11 +15,11 @@ from crowdbench.policies.aig.model import AIGActor, AIGConfig, build_actor
 from crowdbench.policies.base import register
 from crowdbench.policies.recurrent import RecurrentActorPolicy
 
-METHOD = "aig"
+METHOD = "aig_gst"
 
 
 def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[AIGActor, dict[str, Any]]:
-    """The actor of a checkpoint (path or shipped name; ``None``: the shipped ``aig``) in eval mode, and the
+    """The actor of a checkpoint (path or shipped name; ``None``: the shipped ``aig_gst``) in eval mode, and the
     checkpoint's metadata."""
     path = checkpoints.resolve(METHOD, checkpoint)
     ckpt = checkpoints.load(path, METHOD)
@@ -36,7 +36,7 @@ class AIGPolicy(RecurrentActorPolicy):
 
     Args:
         config: World configuration (``max_humans_observed`` must equal the checkpoint's slot count).
-        checkpoint: Path or shipped name (default: the shipped ``aig``).
+        checkpoint: Path or shipped name (default: the shipped ``aig_gst``).
         actor: Alternatively a live :class:`~crowdbench.policies.aig.model.AIGActor` (evaluation during training).
     """
 

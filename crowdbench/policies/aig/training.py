@@ -1,4 +1,4 @@
-"""How ``crowdbench train aig`` builds AIG-GST: its PPO method binding and recipe
+"""How ``crowdbench train aig_gst`` builds AIG-GST: its PPO method binding and recipe
 (:class:`~crowdbench.training.methods.PPOMethod`).
 
 The recipe is DS-RNN's (:mod:`crowdbench.policies.dsrnn.training`; CrowdNav++ trains both with the same PPO
@@ -20,7 +20,7 @@ from crowdbench.training.methods import PPOMethod
 class AIGMethod(PPOMethod):
     """AIG-GST (Liu et al. 2023)."""
 
-    name = "aig"
+    name = "aig_gst"
     model_config = AIGConfig
     actor_class = AIGActor
     observation = "predicted"
