@@ -16,7 +16,7 @@ from crowdbench.evaluation import run_episodes, summarize
 from crowdbench.io import write_text
 from crowdbench.policies import make_policy
 
-POLICIES = (("h2int", {}), ("h2int", {"checkpoint": "h2int-seed2"}), ("sarl", {}))
+POLICIES = (("h2int", {}), ("h2int", {"checkpoint": "h2int-seed2"}))
 SETTINGS = (("default (r U(.3,.5), v U(.5,1.5))", {}),
             ("radius fixed 0.3", {"human_radius_range": None}),
             ("speed fixed 1.0", {"human_v_pref_range": None}),
