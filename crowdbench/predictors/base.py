@@ -37,8 +37,10 @@ class Track:
 
     ``pos`` ``(B, T, H, 2)`` [m] (index ``T − 1`` = now; entries not seen hold the last seen position) and ``seen``
     ``(B, T, H)`` bool (in sensing range at that step and the same person as now). A world's track restarts when its
-    episode step counter does not follow on (a reset), and a slot's when its pedestrian jumped (a re-spawn); calling
-    :meth:`update` twice for the same step changes nothing, so any number of observation builds per step is safe.
+    episode step counter does not follow on (a reset; also one that reads the same as before with the pedestrians
+    elsewhere — an episode that ended on its first step), and a slot's when its pedestrian jumped (a re-spawn);
+    calling :meth:`update` twice for the same state changes nothing, so any number of observation builds per step is
+    safe.
     """
 
     def __init__(self, num_worlds: int, num_humans: int, length: int = OBSERVED) -> None:
@@ -49,7 +51,9 @@ class Track:
     def update(self, positions: np.ndarray, seen: np.ndarray, steps: np.ndarray) -> None:
         """Record the current ``positions`` ``(B, H, 2)`` and visibility ``seen`` ``(B, H)`` at episode steps
         ``steps`` ``(B,)``."""
-        new = steps != self.step
+        # a new step, or a new episode whose counter reads as the last one did (an episode that ended on its first
+        # step restarts at 0 again): the positions tell
+        new = (steps != self.step) | (positions != self.pos[:, -1]).any(axis=(1, 2))
         if not new.any():
             return
         restart = new & (steps != self.step + 1)

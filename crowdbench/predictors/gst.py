@@ -80,6 +80,7 @@ class GSTModel(nn.Module):
     def forward(self, pos: torch.Tensor, seen: torch.Tensor
                 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         n, T, A, _ = pos.shape
+        pos = torch.where(seen.unsqueeze(-1), pos, 0.0)  # what was not seen is not an input (padding may be far away)
         h = pos.new_zeros(n * A, self.cfg.lstm)
         hc = (h, h)
         disp = pos.new_zeros(n, A, 2)
@@ -145,7 +146,9 @@ class GSTPredictor(Predictor):
         mean, _, _ = self.model(torch.as_tensor(pos - origin, dtype=torch.float32), torch.as_tensor(seen))
         pred = mean.numpy().astype(np.float64) + origin
         sub = out[rows]
-        np.put_along_axis(sub, order[:, :, None, None], pred, axis=1)
+        keep = np.take_along_axis(now[rows], order, 1)[..., None, None]  # slots seen now; the others stay put
+        np.put_along_axis(sub, order[:, :, None, None], np.where(keep, pred, np.take_along_axis(
+            sub, order[:, :, None, None], 1)), axis=1)
         out[rows] = sub
         return out
 

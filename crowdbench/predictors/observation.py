@@ -69,7 +69,7 @@ class PredictedObservation(Observation):
         mask = np.zeros((B, n), np.float32)
         k = order.shape[1]
         mask[:, :k] = np.take_along_axis(seen, order, 1)
-        humans[:, :k] = np.take_along_axis(feats, order[..., None], 1) * mask[:, :k, None]
+        humans[:, :k] = np.where(mask[:, :k, None] > 0.5, np.take_along_axis(feats, order[..., None], 1), 0.0)
         return {"robot": obs["robot"], "humans": humans, "mask": mask}
 
     def reward(self, obs: dict[str, np.ndarray]) -> np.ndarray:

@@ -24,13 +24,18 @@ def test_track_restarts_on_reset_and_respawn_and_ignores_repeated_builds():
     for step in range(3):
         tr.update(p + [[[0.1 * step, 0.0], [0.0, 0.0]]], np.array([[True, True]]), np.array([step]))
     assert tr.seen.all() and np.allclose(tr.pos[0, :, 0, 0], [0.0, 0.1, 0.2])
-    tr.update(p + 9.0, np.array([[True, True]]), np.array([2]))  # the same step again: nothing changes
-    assert np.allclose(tr.pos[0, -1, 0], [0.2, 0.0])
+    before = tr.pos.copy(), tr.seen.copy()
+    tr.update(p + [[[0.2, 0.0], [0.0, 0.0]]], np.array([[True, False]]), np.array([2]))  # the same state again
+    assert np.array_equal(tr.pos, before[0]) and np.array_equal(tr.seen, before[1])
     jumped = p + [[[0.3, 0.0], [3.0, 0.0]]]  # pedestrian 1 re-spawned 3 m away
     tr.update(jumped, np.array([[True, True]]), np.array([3]))
     assert tr.seen[0, :, 0].all() and tr.seen[0, :, 1].tolist() == [False, False, True]
     tr.update(p, np.array([[True, False]]), np.array([0]))  # a new episode
     assert tr.seen[0].tolist() == [[False, False], [False, False], [True, False]]
+    # the next episode also starts at step 0 (this one ended on its first step): the positions tell it apart
+    tr.update(p + 4.0, np.array([[True, True]]), np.array([0]))
+    assert tr.seen[0].tolist() == [[False, False], [False, False], [True, True]]
+    np.testing.assert_allclose(tr.pos[0], np.broadcast_to(p[0] + 4.0, (3, 2, 2)))
 
 
 def test_constant_velocity_extrapolates_the_last_seen_step():
@@ -129,3 +134,19 @@ def test_gst_learns_saves_loads_safely_and_predicts_in_the_observation(tmp_path)
         o = ob.build(w)
         w.step(np.zeros((3, 2)))
     assert np.isfinite(o["humans"]).all() and o["mask"].any()
+
+
+def test_a_new_episode_at_the_same_step_count_is_a_new_track():
+    """Episodes that end on their first step restart at step 0 again: the predictions must follow the new crowd
+    (before the fix they extrapolated the previous episode's positions, parked padding at 10 km included)."""
+    from crowdbench.training.shards import Shard, ShardSpec
+
+    spec = ShardSpec(make_config(humans_range=(2, 30)), 6, "circle_crossing", "responsive_orca", {}, "predicted",
+                     {"predictor": "const_vel"})
+    shard = Shard(spec, [np.random.SeedSequence(i) for i in range(6)])
+    for _ in range(4):
+        obs = shard.reset_all(0.0).obs  # every world restarts; step counters read 0 each time
+        seen = obs["mask"] > 0.5
+        pred = obs["humans"][..., 2:].reshape(6, 30, 5, 2)
+        assert seen.any()
+        np.testing.assert_allclose(pred[seen], np.repeat(obs["humans"][..., None, :2], 5, axis=2)[seen], atol=1e-5)
