@@ -250,7 +250,8 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
         ray_address: str | None = None, force: bool = False,
         progress: Callable[[str], None] | None = None) -> dict[str, list[dict[str, Any]]]:
     """Evaluate every entry on the suite's cells (reusing stored cells unless ``force``), then write each entry's
-    ``OUT/<slug>.json|md`` (results, fingerprint, provenance, wall time) and ``OUT/LEADERBOARD.md``; returns the
+    ``OUT/<slug>.json|md`` (results, fingerprint, provenance, wall time), ``OUT/LEADERBOARD.md`` and the figures
+    (``success.png``; ``ablation.png`` when ablations are on the board); returns the
     result rows by label (an errored cell is a row with ``error``)."""
     if backend not in BACKENDS:
         raise ValueError(f"--backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
@@ -306,6 +307,8 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
                leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name))
     if {"I", "II"} & set(suite.tables):
         plot_board(everyone, os.path.join(out, "success.png"), groups)
+        if "ablation" in groups.values():
+            plot_board(everyone, os.path.join(out, "ablation.png"), groups, rows="ablation")
     return board
 
 

@@ -154,9 +154,13 @@ def save(results: list[dict[str, Any]], json_path: str | None, md_path: str | No
         write_text(md_path, markdown(results))
 
 
-def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[str, str] | None = None) -> None:
+def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[str, str] | None = None,
+               rows: str = "main", reference: str = "h2int") -> None:
     """Success against the response regime ρ (Table I, N = 20) and against crowd size N (Table II, ρ = 0), one line
-    per main method with its Wilson 95 % band; seed entries of a method widen its band to their envelope."""
+    per method of group ``rows`` (``main``; or ``ablation``, headed by ``reference``: the paper's ablation figure).
+    A method with several training seeds (entries of group ``seeds:<label>``) is drawn at the seeds' mean, with error
+    bars from the lowest to the highest seed and a band enveloping the seeds' Wilson 95 % intervals; one seed: its
+    interval."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -168,10 +172,11 @@ def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[s
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100, sharey=True)
     specs = (("I", "responsiveness", "mean responsiveness ρ (Table I, N = 20)"),
              ("II", "humans", "pedestrians N (Table II, ρ = 0)"))
+    heads = [lb for lb in board if groups.get(lb, "main") == rows]
+    if rows != "main" and reference in board and reference not in heads:
+        heads.insert(0, reference)
     for ax, (table, key, xlabel) in zip(axes, specs, strict=True):
-        for label in board:
-            if groups.get(label, "main") != "main":
-                continue
+        for label in heads:
             family = [label] + [lb for lb, g in groups.items() if g == f"seeds:{label}" and lb in board]
             pts: dict[float, list[tuple[float, float, float]]] = {}
             for lb in family:
@@ -188,11 +193,16 @@ def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[s
             n_seeds = len(family)
             (line,) = ax.plot(xs, mean, "o-", label=label + (f" ({n_seeds} seeds)" if n_seeds > 1 else ""))
             ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
+            if n_seeds > 1:
+                low = [100 * min(p[0] for p in pts[x]) for x in xs]
+                high = [100 * max(p[0] for p in pts[x]) for x in xs]
+                ax.errorbar(xs, mean, yerr=[np.subtract(mean, low), np.subtract(high, mean)], fmt="none",
+                            ecolor=line.get_color(), capsize=3)
         ticks = sorted({r[key] for rows in board.values() for r in rows if r["table"] == table})
         ax.set_xticks(ticks)
         ax.set_xlabel(xlabel)
         ax.grid(alpha=0.3)
-    axes[0].set_ylabel("success rate [%] (band: 95 % interval)")
+    axes[0].set_ylabel("success rate [%] (band: 95 % interval;\nbars: seed range)")
     axes[0].invert_xaxis()  # harder to the right: less responsive
     axes[1].legend(fontsize=8, loc="lower left")
     fig.tight_layout()
@@ -266,8 +276,9 @@ METHODS: tuple[Entry, ...] = (
 
 
 def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
-    """``methods`` whose checkpoint is shipped (a learned method appears once its checkpoint lands), each main
-    entry followed by its other shipped training seeds (checkpoints ``<name>-seed<k>``, group ``seeds:<label>``)."""
+    """``methods`` whose checkpoint is shipped (a learned method appears once its checkpoint lands), each main or
+    ablation entry followed by its other shipped training seeds (checkpoints ``<name>-seed<k>``, group
+    ``seeds:<label>``)."""
     import re
 
     from crowdbench.checkpoints import shipped_names
@@ -279,7 +290,7 @@ def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
         if ckpt and ckpt not in names:
             continue
         out[e.slug] = e
-        if e.group == "main" and ckpt:
+        if e.group in ("main", "ablation") and ckpt:
             seeds = sorted((int(m[1]), n) for n in names if (m := re.fullmatch(rf"{re.escape(ckpt)}-seed(\d+)", n)))
             for k, name in seeds:
                 seed_entry = Entry(f"{e.label}-seed{k}", e.policy, (("checkpoint", name),), f"seeds:{e.label}")

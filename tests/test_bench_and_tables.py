@@ -99,6 +99,30 @@ def test_seed_rows_report_mean_and_spread():
     assert "## h2int across training seeds" in md and "| mean [spread], 3 seeds | 88.3 [15.0] |" in md
 
 
+def test_ablations_get_their_training_seeds_and_a_figure_with_seed_spread(tmp_path, monkeypatch):
+    from crowdbench import checkpoints
+
+    shipped = ["h2int", "h2int-seed2", "flat", "flat-seed1", "flat-seed2", "meanpool", "standard"]
+    monkeypatch.setattr(checkpoints, "shipped_names", lambda method: shipped if method == "h2int" else [])
+    entries = leaderboard.shipped_entries()
+    assert entries["h2int-flat-seed1"].group == "seeds:h2int-flat"
+    assert entries["h2int-flat-seed2"].policy_kwargs() == {"checkpoint": "flat-seed2"}
+    assert "h2int-meanpool-seed1" not in entries and entries["h2int-seed2"].group == "seeds:h2int"
+
+    def rows(p):
+        return [{"policy": "x", "table": "I", "row": "High", "responsiveness": 0.7, "humans": 20,
+                 "success_rate": p, "collision_rate": 1 - p, "timeout_rate": 0.0, "nav_time": 10.0,
+                 "ci": {"success_rate": [p - 0.02, p + 0.02]}}]
+
+    board = {"h2int": rows(0.9), "h2int-flat": rows(0.7), "h2int-flat-seed1": rows(0.6), "h2int-flat-seed2": rows(0.8)}
+    groups = {"h2int": "main", "h2int-flat": "ablation", "h2int-flat-seed1": "seeds:h2int-flat",
+              "h2int-flat-seed2": "seeds:h2int-flat"}
+    md = leaderboard.leaderboard_markdown(board, groups)
+    assert "## h2int-flat across training seeds" in md and "| mean [spread], 3 seeds | 70.0 [20.0] |" in md
+    leaderboard.plot_board(board, str(tmp_path / "ablation.png"), groups, rows="ablation")
+    assert (tmp_path / "ablation.png").stat().st_size > 10_000
+
+
 def test_trajectory_panels_are_drawn(tmp_path):
     from crowdbench.panels import episode, plot
     from crowdbench.policies import make_policy
