@@ -406,8 +406,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--il-episodes", type=int, default=None, help="cadrl/sarl: ORCA demonstrations (default 3000)")
     p.add_argument("--rl-episodes", type=int, default=None, help="cadrl/sarl: TD-learning episodes (default 10000)")
     p.add_argument("--free-space", action=argparse.BooleanOptionalAction, default=None,
-                   help="cadrl/sarl: value states with nobody sensed analytically (default: on for cadrl, off for "
-                        "sarl)")
+                   help="cadrl/sarl: value states with nobody sensed analytically (default off: it made CADRL worse, "
+                        "README)")
     p.set_defaults(func=train_cmd)
     p = sub.add_parser("predictor", help="trajectory predictor (AIG-GST): record crowd data, train, compare")
     p.add_argument("action", choices=("record", "train", "compare"))

@@ -168,9 +168,8 @@ def test_free_space_value_by_hand_and_it_overrides_the_network_only_when_nobody_
 def test_td_targets_use_the_free_space_value_for_next_states_with_nobody_sensed(tmp_path):
     from crowdbench.training.value import Rollout
 
-    assert ValueTrainConfig(method="cadrl").free_space and not ValueTrainConfig(method="sarl").free_space
-    assert not ValueTrainConfig.from_dict({"method": "cadrl"}).free_space  # saved before the option: off
-    trainer = ValueTrainer(tiny_value(method="cadrl"), str(tmp_path / "run"), quiet=True)
+    assert not ValueTrainConfig(method="cadrl").free_space and not ValueTrainConfig.from_dict({}).free_space
+    trainer = ValueTrainer(tiny_value(method="cadrl", free_space=True), str(tmp_path / "run"), quiet=True)
     trainer.target = FleeValue()
     T, n = 4, trainer.config.max_humans_observed
     states = np.zeros((T, n, 13), np.float32)

@@ -15,11 +15,10 @@ Conventions (CrowdNav ``multi_human_rl.py`` / ``cadrl.py`` at 20d6780):
 * **Sensing**: only pedestrians whose centre is within ``sensing_range`` enter the state (the paper's 5 m, the range
   every method of the leaderboard sees); a state with none gets one dummy pedestrian at rest 15 m behind the robot,
   far from any interaction, as CrowdNav++ pads unseen slots with far-away dummies.
-* **Free space** (``free_space=True``, CADRL's default): a state in which nobody is sensed is valued analytically,
+* **Free space** (``free_space=True``, off by default): a state in which nobody is sensed is valued analytically,
   :func:`free_space_value` — the discounted goal reward of driving straight there at v_pref — instead of by the
-  network on the dummy. CrowdNav never meets such states (its robot sees every human); here CADRL's
-  min-over-pedestrians value of the lone dummy sent the robot away from the crowd, where timeouts are never stored and
-  so never corrected (README, "Baselines CADRL and SARL").
+  network on the dummy. CrowdNav never meets such states (its robot sees every human). Tried against CADRL's
+  timeouts; it did not help them (README, "Baselines CADRL and SARL").
 """
 
 from __future__ import annotations
