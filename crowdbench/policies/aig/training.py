@@ -33,8 +33,8 @@ class AIGMethod(PPOMethod):
         "original": {},
         "small": {"robot_embed": 64, "edge_dims": (64, 128), "heads": 4, "human_embed": 64, "attention": 32,
                   "node_embed": 32, "node_rnn": 64, "latent": 64, "head_dims": (64, 64)}}
-    """``small``: every width ÷ 4 (self-attention 128 × 4 heads, GRU 64; 0.18 M parameters instead of 2.37 M), about
-    8× cheaper per update on this CPU."""
+    """``small``: every width ÷ 4 (self-attention 128 × 4 heads, GRU 64; 0.18 M parameters instead of 2.37 M): 500
+    against 75 env steps/s of training on one core of this machine (README)."""
 
     def observation_kwargs(self, model: AIGConfig) -> dict[str, Any]:
         return model.observation_kwargs()

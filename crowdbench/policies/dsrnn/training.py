@@ -34,8 +34,8 @@ class DSRNNMethod(PPOMethod):
         "original": {},
         "small": {"edge_embed": 32, "edge_rnn": 64, "attention": 32, "robot_dims": (3, 32), "edge_out": 32,
                   "node_rnn": 64, "latent": 64, "head_dims": (64, 64)}}
-    """``small``: edge GRUs 64 instead of 256, latent and heads 64 (0.08 M parameters instead of 0.83 M); only
-    about 1.4× cheaper per update on this CPU, whose cost is the per-step recurrence over the slots in view."""
+    """``small``: edge GRUs 64 instead of 256, latent and heads 64 (0.08 M parameters instead of 0.83 M): 553
+    against 193 env steps/s of training on one core of this machine (README)."""
 
     def actor_cfg(self, model: DSRNNConfig) -> dict[str, Any]:
         return model.actor_kwargs()
