@@ -150,3 +150,17 @@ def test_a_new_episode_at_the_same_step_count_is_a_new_track():
         pred = obs["humans"][..., 2:].reshape(6, 30, 5, 2)
         assert seen.any()
         np.testing.assert_allclose(pred[seen], np.repeat(obs["humans"][..., None, :2], 5, axis=2)[seen], atol=1e-5)
+
+
+def test_cli_records_trains_and_compares(tmp_path, capsys):
+    from crowdbench.cli import main
+
+    data = str(tmp_path / "d.npz")
+    assert main(["predictor", "record", "--out", data, "--worlds", "3", "--steps", "60", "--stride", "2"]) == 0
+    assert main(["predictor", "train", "--data", data, "--out", str(tmp_path / "run"), "--epochs", "1"]) == 0
+    assert "held-out ADE" in capsys.readouterr().out
+    assert main(["predictor", "compare", "--data", data, "--checkpoint", str(tmp_path / "run" / "gst.pt"),
+                 "--json", str(tmp_path / "c.json")]) == 0
+    assert "const_vel" in capsys.readouterr().out and (tmp_path / "c.json").exists()
+    assert main(["predictor", "train"]) == 2
+    assert "--data is required" in capsys.readouterr().err
