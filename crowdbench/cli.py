@@ -35,6 +35,7 @@ def _common(p: argparse.ArgumentParser) -> None:
 
 def demo(args: argparse.Namespace) -> int:
     """Run one episode with the chosen robot policy, print its outcome and write an animated GIF."""
+    from crowdbench.config import make_config
     from crowdbench.envs import CrowdParallelEnv
     from crowdbench.render import save_gif
 
@@ -44,7 +45,7 @@ def demo(args: argparse.Namespace) -> int:
               "observation": POLICIES.get(name).observation}
     args.policy, args.policy_pos = name, None
     args.checkpoint = getattr(args, "checkpoint", None)
-    policy = _policy(args, CrowdParallelEnv(**kwargs).config)
+    policy = _policy(args, make_config(num_humans=args.humans))  # the env's config (envs.common.build_world)
     env = CrowdParallelEnv(**kwargs, observation_kwargs=policy.observation_kwargs)
     obs, _ = env.reset(seed=args.seed)
     frames = [env.render()]

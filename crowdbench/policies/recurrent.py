@@ -4,14 +4,36 @@ on first use."""
 
 from __future__ import annotations
 
+import os
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 import torch
 
+from crowdbench import checkpoints
 from crowdbench.config import WorldConfig
 from crowdbench.policies.base import RobotPolicy
 from crowdbench.training.models import RecurrentTrunkActor
+
+
+def stored_config(cls: type, ckpt: dict[str, Any]) -> Any:
+    """The architecture dataclass ``cls`` of a checkpoint's ``model`` fields (JSON lists back to tuples)."""
+    return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in dict(ckpt["model"]).items()})
+
+
+def load_actor(method: str, checkpoint: str | os.PathLike | None, model_config: Callable[[dict[str, Any]], Any],
+               build_actor: Callable[[Any, int], RecurrentTrunkActor]) -> tuple[RecurrentTrunkActor, Any, dict]:
+    """A recurrent PPO method's actor from a checkpoint (path, shipped name, or ``None``: the shipped one named like
+    ``method``) in eval mode, its architecture (``model_config(ckpt)``) and metadata (iteration, env steps, seed,
+    path)."""
+    path = checkpoints.resolve(method, checkpoint)
+    ckpt = checkpoints.load(path, method)
+    cfg = model_config(ckpt)
+    actor = build_actor(cfg, int(ckpt["n_max"]))
+    actor.load_state_dict(ckpt["actor"])
+    meta = {k: ckpt.get(k) for k in ("iteration", "env_steps", "seed")}
+    return actor.eval(), cfg, {**meta, "path": path}
 
 
 class RecurrentActorPolicy(RobotPolicy):

@@ -144,12 +144,9 @@ class GSTPredictor(Predictor):
         seen = np.take_along_axis(track.seen[rows], order[:, None, :], axis=2)
         origin = world.pos[rows, 0][:, None, None, :]
         mean, _, _ = self.model(torch.as_tensor(pos - origin, dtype=torch.float32), torch.as_tensor(seen))
-        pred = mean.numpy().astype(np.float64) + origin
-        sub = out[rows]
-        keep = np.take_along_axis(now[rows], order, 1)[..., None, None]  # slots seen now; the others stay put
-        np.put_along_axis(sub, order[:, :, None, None], np.where(keep, pred, np.take_along_axis(
-            sub, order[:, :, None, None], 1)), axis=1)
-        out[rows] = sub
+        full = out[rows]
+        np.put_along_axis(full, order[:, :, None, None], mean.numpy().astype(np.float64) + origin, axis=1)
+        out[rows] = np.where(now[rows][..., None, None], full, out[rows])  # slots not seen now stay put
         return out
 
 

@@ -147,23 +147,30 @@ def errors(pred: np.ndarray, future: np.ndarray, valid: np.ndarray) -> tuple[flo
     return float(d.mean()), float(d[:, -1].mean())
 
 
+def predict_scenes(model, data: dict[str, np.ndarray], idx: np.ndarray) -> np.ndarray:
+    """Mean predictions ``(len(idx), A, K, 2)`` [m] of ``model`` (a :class:`~crowdbench.predictors.gst.GSTModel`) for
+    scenes ``idx`` of ``data``, in chunks of about 512 scenes, each cut to its most pedestrians seen now (they come
+    first; the rest stay zero)."""
+    import torch
+
+    preds = []
+    with torch.inference_mode():
+        for chunk in np.array_split(idx, max(1, len(idx) // 512)):
+            a = max(int(data["seen"][chunk, -1].sum(-1).max()), 1)
+            mean = model(torch.from_numpy(data["pos"][chunk, :, :a]), torch.from_numpy(data["seen"][chunk, :, :a]))[0]
+            full = np.zeros((len(chunk), data["future"].shape[1], model.cfg.horizon, 2), np.float32)
+            full[:, :a] = mean.numpy()
+            preds.append(full)
+    return np.concatenate(preds)
+
+
 def compare(data: dict[str, np.ndarray], checkpoint: str | None = None) -> dict[str, tuple[float, float]]:
     """ADE and FDE [m] of the ``gst`` predictor (``checkpoint``; default: the shipped one) and of constant velocity
     on every scene of ``data``."""
-    import torch
-
     from crowdbench.predictors.gst import load_model
 
     model, _ = load_model(checkpoint)
-    preds = []
-    with torch.inference_mode():
-        for idx in np.array_split(np.arange(len(data["pos"])), max(1, len(data["pos"]) // 512)):
-            a = max(int(data["seen"][idx, -1].sum(-1).max()), 1)
-            mean = model(torch.from_numpy(data["pos"][idx, :, :a]), torch.from_numpy(data["seen"][idx, :, :a]))[0]
-            full = np.zeros((len(idx), data["future"].shape[1], model.cfg.horizon, 2), np.float32)
-            full[:, :a] = mean.numpy()
-            preds.append(full)
-    return {"gst": errors(np.concatenate(preds), data["future"], data["valid"]),
+    return {"gst": errors(predict_scenes(model, data, np.arange(len(data["pos"]))), data["future"], data["valid"]),
             "const_vel": errors(constant_velocity(data["pos"], data["seen"]), data["future"], data["valid"])}
 
 
@@ -193,17 +200,6 @@ def train(data: dict[str, np.ndarray], out: str, cfg: PredictorTrainConfig, quie
         i = torch.from_numpy(idx)
         return t["pos"][i, :, :a], t["seen"][i, :, :a], t["future"][i, :a], t["valid"][i, :a]
 
-    def predict(idx: np.ndarray) -> np.ndarray:
-        preds = []
-        with torch.inference_mode():
-            for chunk in np.array_split(idx, max(1, len(idx) // 512)):
-                pos, seen, _, _ = batch(chunk)
-                mean = model(pos, seen)[0].numpy()
-                full = np.zeros((len(chunk), data["future"].shape[1], HORIZON, 2), np.float32)
-                full[:, :mean.shape[1]] = mean
-                preds.append(full)
-        return np.concatenate(preds)
-
     history: dict[str, list[float]] = {"epoch": [], "nll": [], "ade": [], "fde": [], "time": []}
     te = np.flatnonzero(test)
     t0 = time.time()
@@ -222,7 +218,7 @@ def train(data: dict[str, np.ndarray], out: str, cfg: PredictorTrainConfig, quie
             losses.append(loss.item())
         sched.step()
         model.eval()
-        ade, fde = errors(predict(te), data["future"][te], data["valid"][te])
+        ade, fde = errors(predict_scenes(model, data, te), data["future"][te], data["valid"][te])
         for k, v in (("epoch", epoch + 1), ("nll", float(np.mean(losses))), ("ade", ade), ("fde", fde),
                      ("time", time.time() - t0)):
             history[k].append(v)

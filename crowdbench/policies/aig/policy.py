@@ -7,13 +7,14 @@ predictor the checkpoint was trained with (:attr:`AIGPolicy.observation_kwargs`)
 from __future__ import annotations
 
 import os
+from functools import partial
 from typing import Any
 
-from crowdbench import checkpoints
 from crowdbench.config import WorldConfig
 from crowdbench.policies.aig.model import AIGActor, AIGConfig, build_actor
 from crowdbench.policies.base import register
-from crowdbench.policies.recurrent import RecurrentActorPolicy
+from crowdbench.policies.recurrent import RecurrentActorPolicy, stored_config
+from crowdbench.policies.recurrent import load_actor as load_recurrent
 
 METHOD = "aig_gst"
 
@@ -21,13 +22,8 @@ METHOD = "aig_gst"
 def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[AIGActor, dict[str, Any]]:
     """The actor of a checkpoint (path or shipped name; ``None``: the shipped ``aig_gst``) in eval mode, and the
     checkpoint's metadata."""
-    path = checkpoints.resolve(METHOD, checkpoint)
-    ckpt = checkpoints.load(path, METHOD)
-    model = {k: tuple(v) if isinstance(v, list) else v for k, v in dict(ckpt["model"]).items()}
-    actor = build_actor(AIGConfig(**model), int(ckpt["n_max"]))
-    actor.load_state_dict(ckpt["actor"])
-    meta = {k: ckpt.get(k) for k in ("iteration", "env_steps", "seed")}
-    return actor.eval(), {**meta, "path": path}
+    actor, _, meta = load_recurrent(METHOD, checkpoint, partial(stored_config, AIGConfig), build_actor)
+    return actor, meta
 
 
 @register(METHOD)

@@ -7,13 +7,14 @@ Deterministic (the Gaussian's mean), one recurrent state per world (edge, per-pe
 from __future__ import annotations
 
 import os
+from functools import partial
 from typing import Any
 
-from crowdbench import checkpoints
 from crowdbench.config import WorldConfig
 from crowdbench.policies.base import register
 from crowdbench.policies.dsrnn.model import DSRNNActor, DSRNNConfig, build_actor
-from crowdbench.policies.recurrent import RecurrentActorPolicy
+from crowdbench.policies.recurrent import RecurrentActorPolicy, stored_config
+from crowdbench.policies.recurrent import load_actor as load_recurrent
 
 METHOD = "dsrnn"
 
@@ -21,13 +22,8 @@ METHOD = "dsrnn"
 def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[DSRNNActor, dict[str, Any]]:
     """The actor of a checkpoint (path or shipped name; ``None``: the shipped ``dsrnn``) in eval mode, and the
     checkpoint's metadata."""
-    path = checkpoints.resolve(METHOD, checkpoint)
-    ckpt = checkpoints.load(path, METHOD)
-    model = {k: tuple(v) if isinstance(v, list) else v for k, v in dict(ckpt["model"]).items()}
-    actor = build_actor(DSRNNConfig(**model), int(ckpt["n_max"]))
-    actor.load_state_dict(ckpt["actor"])
-    meta = {k: ckpt.get(k) for k in ("iteration", "env_steps", "seed")}
-    return actor.eval(), {**meta, "path": path}
+    actor, _, meta = load_recurrent(METHOD, checkpoint, partial(stored_config, DSRNNConfig), build_actor)
+    return actor, meta
 
 
 @register(METHOD)

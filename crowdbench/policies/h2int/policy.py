@@ -10,11 +10,11 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from crowdbench import checkpoints
 from crowdbench.config import WorldConfig
 from crowdbench.policies.base import register
 from crowdbench.policies.h2int.model import H2INTActor, H2INTConfig, build_actor
 from crowdbench.policies.recurrent import RecurrentActorPolicy
+from crowdbench.policies.recurrent import load_actor as load_recurrent
 
 METHOD = "h2int"
 
@@ -32,13 +32,8 @@ def model_config(ckpt: dict[str, Any]) -> H2INTConfig:
 def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[H2INTActor, dict[str, Any]]:
     """The actor of a checkpoint (path, shipped name such as ``"meanpool"``, or ``None`` for the shipped H²INT) in
     eval mode, and the checkpoint's metadata (variant, iteration, env steps, seed, path)."""
-    path = checkpoints.resolve(METHOD, checkpoint)
-    ckpt = checkpoints.load(path, METHOD)
-    cfg = model_config(ckpt)
-    actor = build_actor(cfg, int(ckpt["n_max"]))
-    actor.load_state_dict(ckpt["actor"])
-    meta = {k: ckpt.get(k) for k in ("iteration", "env_steps", "seed")}
-    return actor.eval(), {**meta, "variant": cfg.variant, "path": path}
+    actor, cfg, meta = load_recurrent(METHOD, checkpoint, model_config, build_actor)
+    return actor, {**meta, "variant": cfg.variant}
 
 
 @register(METHOD)
