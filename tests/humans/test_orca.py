@@ -168,3 +168,20 @@ def test_orca_pedestrians_avoid_world_walls():
         w.step(np.zeros((2, 2)))
         d = point_segment_distance(w.pos[:, 1:, None], w.edges[None, None, :, 0], w.edges[None, None, :, 1])
         assert d.min() >= 0.3 - 1e-6  # ORCA's obstacle lines keep them off the box (the clamp never needed)
+
+
+@pytest.mark.parametrize("m", [0, 1, 7, 20, 48, 49, 120])
+@pytest.mark.parametrize("k_max", [1, 5, 10, 30, 200])
+def test_neighbour_selection_is_rvo2s(m, k_max):
+    """The kernel's neighbour selection (branch-free ranks up to 48 candidates, insertion beyond) keeps RVO2's
+    result: the ``k_max`` smallest squared distances ascending, equal distances in agent-index order."""
+    from crowdbench.humans.orca_kernel import _nearest
+
+    rng = np.random.default_rng(m * 1000 + k_max)
+    d = rng.integers(0, 6, m).astype(np.float64) * 0.5  # many exact ties
+    idx = np.sort(rng.choice(500, m, replace=False)).astype(np.int64)
+    nb_d, nb_idx = np.full(m + 1, -1.0), np.full(m + 1, -1, np.int64)
+    cnt = _nearest(d, idx, m, k_max, nb_d, nb_idx)
+    want = sorted(zip(d.tolist(), idx.tolist(), strict=True))[:k_max]
+    assert cnt == len(want)
+    assert list(zip(nb_d[:cnt].tolist(), nb_idx[:cnt].tolist(), strict=True)) == want
