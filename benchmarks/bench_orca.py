@@ -4,8 +4,9 @@
 
 Times :func:`crowdbench.humans.orca_kernel.orca_batch` alone (neighbour search, half-planes, linear programs)
 while the crowd evolves (positions integrated between calls, outside the timing); the measurement is
-:func:`crowdbench.bench.orca_agent_steps_per_s`, shared with ``crowdbench bench``. Reference: the C++ RVO2 library
-does ~700,000 agent-steps/s at 20 agents on this machine (DEVELOPERS.md).
+:func:`crowdbench.bench.orca_agent_steps_per_s`, shared with ``crowdbench bench``. The like-for-like comparison with
+the C++ RVO2 library (built ``-O2``, same crowd, same parameters, run in alternation) is
+``benchmarks/bench_peers.py --orca-only --interleaved 5`` (README, "Speed").
 """
 
 from __future__ import annotations
