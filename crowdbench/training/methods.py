@@ -50,6 +50,10 @@ class PPOMethod(ABC):
             raise ValueError(f"--variant {name!r} for {self.name}; valid choices: {', '.join(self.variants)}")
         return dict(self.variants[name])
 
+    def observation_name(self, model: Any) -> str:
+        """The observation builder that architecture ``model`` reads (default: :attr:`observation`)."""
+        return self.observation
+
     def observation_kwargs(self, model: Any) -> dict[str, Any]:
         """Options of the :attr:`observation` builder for architecture ``model`` (default: none)."""
         return {}
@@ -67,12 +71,14 @@ class PPOMethod(ABC):
         """The deterministic :class:`~crowdbench.policies.RobotPolicy` of a live ``actor`` (quick evaluations)."""
 
     def label(self, model: Any) -> str:
-        """Short name of a run's architecture (plots, default run folder): the method, and the variant it matches
-        unless that is the first (default) one."""
-        for i, (name, fields) in enumerate(self.variants.items()):
-            if i and all(getattr(model, k) == (tuple(v) if isinstance(v, list) else v) for k, v in fields.items()):
-                return f"{self.name}-{name}"
-        return self.name
+        """Short name of a run's architecture (plots, default run folder): the method, and the most specific variant
+        it matches (the most fields) unless that is the first (default) one."""
+        def matches(fields: dict[str, Any]) -> bool:
+            return all(getattr(model, k) == (tuple(v) if isinstance(v, list) else v) for k, v in fields.items())
+
+        named = list(self.variants.items())[1:]
+        matching = [(len(fields), name) for name, fields in named if matches(fields)]
+        return f"{self.name}-{max(matching)[1]}" if matching else self.name
 
 
 PPO_METHODS: Registry[PPOMethod] = Registry("PPO method", "crowdbench.ppo_methods")

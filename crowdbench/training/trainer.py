@@ -69,7 +69,7 @@ class Trainer:
                                 enabled=cfg.anneal)
         self.env = CrowdVecEnv(cfg.num_envs, seed=cfg.seed, curriculum=curriculum, humans_range=cfg.humans_range,
                                reward_scale=cfg.reward_scale, processes=cfg.env_processes,
-                               observation=self.method.observation,
+                               observation=self.method.observation_name(cfg.model),
                                observation_kwargs=self.method.observation_kwargs(cfg.model))
         rcfg = rsl_cfg(cfg, self.method)
         self.runner = OnPolicyRunner(self.env, rcfg, log_dir=None)

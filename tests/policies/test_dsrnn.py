@@ -79,6 +79,38 @@ def test_attention_ignores_slots_out_of_view_and_slot_order():
         assert torch.isfinite(core.cell(_obs(n, g, visible=0.0), h)[0]).all()
 
 
+def test_nearest_slots_follow_crowdnav_plus_plus():
+    """``slots="nearest"`` (CrowdNav++'s DS-RNN): the nearest-first ``relative`` observation, an unseen slot is the
+    far dummy whatever it held, and every slot's state is stepped and attended."""
+    import pytest
+
+    from crowdbench.policies.dsrnn.model import DUMMY
+    from crowdbench.policies.dsrnn.training import DSRNNMethod
+
+    cfg = DSRNNConfig(slots="nearest")
+    assert cfg.observation == "relative" and DSRNNConfig().observation == "relative_by_id"
+    assert DSRNNMethod().observation_name(cfg) == "relative"
+    with pytest.raises(ValueError, match="slots='sorted'; valid choices: by_id, nearest"):
+        DSRNNConfig(slots="sorted")
+    torch.manual_seed(0)
+    core, g = DSRNNCore(cfg, K), torch.Generator().manual_seed(5)
+    n = 5
+    x = _obs(n, g)
+    h = torch.randn(n, core.state_dim, generator=g)
+    with torch.no_grad():
+        out, h_next = core.cell(x, h)
+        before, after = (v[:, 256:256 + K * 256].reshape(n * K, 256) for v in (h, h_next))
+        assert (after != before).any(-1).all()  # every slot stepped, in view or not
+        hidden = x[:, 9 + 2 * K:] < 0.5
+        x2 = x.clone()
+        x2[:, 9:9 + 2 * K].view(n, K, 2)[hidden] = 7.0  # what an unseen slot holds is replaced by the dummy
+        torch.testing.assert_close(core.cell(x2, h)[0], out)
+        x3 = x.clone()
+        x3[:, 9:9 + 2 * K].view(n, K, 2)[hidden] = DUMMY
+        x3[:, 9 + 2 * K:] = 1.0  # … so it equals a pedestrian seen at the dummy's place
+        torch.testing.assert_close(core.cell(x3, h)[0], out)
+
+
 def test_done_worlds_restart_from_zero_state():
     core, g = _core(), torch.Generator().manual_seed(3)
     with torch.no_grad():

@@ -39,6 +39,10 @@ from crowdbench.training.models import RecurrentTrunkActor
 
 ROBOT_NODE = 7
 """Robot node features: the first 7 of the robot vector [p_x, p_y, r, g_x, g_y, v_pref, θ]."""
+SLOT_ORDERS = {"by_id": "relative_by_id", "nearest": "relative"}
+""":attr:`DSRNNConfig.slots` → the observation it reads."""
+DUMMY = 15.0
+"""Relative position [m] (both axes) of an unseen slot with ``slots="nearest"`` (CrowdNav++'s dummy human)."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +67,20 @@ class DSRNNConfig:
     """Hidden widths of the actor and critic heads (tanh) [-]."""
     action_std: float = 1.0
     """Initial standard deviation of the Gaussian policy (learned, state-independent; log-std 0) [m/s]."""
+    slots: str = "by_id"
+    """What a spatial-edge slot holds. ``by_id``: pedestrian j (the ``relative_by_id`` observation), stepped only
+    while in view, unseen slots masked out of the attention (CrowdNav_DSRNN's one state per person).
+    ``nearest``: CrowdNav++'s DS-RNN baseline (``sort_humans``): the ``relative`` observation, nearest first;
+    unseen slots hold a dummy at (15, 15) m, every slot is stepped and attended."""
+
+    def __post_init__(self) -> None:
+        if self.slots not in SLOT_ORDERS:
+            raise ValueError(f"slots={self.slots!r}; valid choices: {', '.join(SLOT_ORDERS)}")
+
+    @property
+    def observation(self) -> str:
+        """The robot observation this architecture reads."""
+        return SLOT_ORDERS[self.slots]
 
     def actor_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :class:`DSRNNActor` (and rsl-rl's ``actor`` config)."""
@@ -102,6 +120,9 @@ class DSRNNCore(nn.Module):
         states."""
         n, K, R = x.shape[0], self.slots, self.cfg.edge_rnn
         robot, rel, mask = x[:, :9], x[:, 9:9 + 2 * K].reshape(n, K, 2), x[:, 9 + 2 * K:] > 0.5
+        if self.cfg.slots == "nearest":  # CrowdNav++: unseen slots are a far dummy, stepped and attended like the rest
+            rel = torch.where(mask.unsqueeze(-1), rel, DUMMY)
+            mask = torch.ones_like(mask)
         ht, hs, hn = h[:, :R], h[:, R:R + K * R].reshape(n * K, R), h[:, R + K * R:]
         ht = self.temporal_rnn(self.temporal_embed(robot[:, 7:9]), ht)
         seen = mask.reshape(n * K)

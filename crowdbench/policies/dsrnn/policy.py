@@ -45,3 +45,4 @@ class DSRNNPolicy(RecurrentActorPolicy):
         if actor is None:
             actor, meta = load_actor(checkpoint)
         super().__init__(config, actor, actor.slots, meta)
+        self.observation = actor.dsrnn.observation  # by pedestrian ID, or nearest first (DSRNNConfig.slots)

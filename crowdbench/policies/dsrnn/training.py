@@ -4,7 +4,7 @@
 The recipe is the original's (CrowdNav_DSRNN ``crowd_nav/configs/config.py``, ``pytorchBaselines``): Adam at a fixed
 4e-5, 5 epochs, clip 0.2, gradient norm 0.5, no entropy bonus, γ 0.99, λ 0.95, value loss weight 0.5 on its
 ½·squared error (0.25 on rsl-rl's squared error), mini-batches of 180 transitions (12 processes × 30 steps in 2
-mini-batches there; 192 worlds × 30 steps in 32 mini-batches of 6 worlds here — the same 36 transitions per
+mini-batches there; 192 worlds × 30 steps in 32 mini-batches of 6 worlds here — the same 180 transitions per
 gradient step). No responsiveness curriculum (H²INT's contribution): the crowd stays at ρ = 0 (``rho_min``), the
 original's invisible robot. Rewards are crowdbench's paper reward (the original's, without its one-step lag), scaled
 by ``reward_scale`` as for H²INT.
@@ -16,6 +16,9 @@ from typing import Any, ClassVar
 
 from crowdbench.policies.dsrnn.model import DSRNNActor, DSRNNConfig
 from crowdbench.training.methods import PPOMethod
+
+SMALL = {"edge_embed": 32, "edge_rnn": 64, "attention": 32, "robot_dims": (3, 32), "edge_out": 32, "node_rnn": 64,
+         "latent": 64, "head_dims": (64, 64)}
 
 
 class DSRNNMethod(PPOMethod):
@@ -32,10 +35,14 @@ class DSRNNMethod(PPOMethod):
 
     variants: ClassVar[dict[str, dict[str, Any]]] = {
         "original": {},
-        "small": {"edge_embed": 32, "edge_rnn": 64, "attention": 32, "robot_dims": (3, 32), "edge_out": 32,
-                  "node_rnn": 64, "latent": 64, "head_dims": (64, 64)}}
+        "small": SMALL,
+        "small_nearest": {**SMALL, "slots": "nearest"}}
     """``small``: edge GRUs 64 instead of 256, latent and heads 64 (0.08 M parameters instead of 0.83 M): 553
-    against 193 env steps/s of training on one core of this machine (README)."""
+    against 193 env steps/s of training on one core of this machine (README). ``small_nearest``: the same widths with
+    CrowdNav++'s slot handling (:attr:`DSRNNConfig.slots`)."""
+
+    def observation_name(self, model: DSRNNConfig) -> str:
+        return model.observation
 
     def actor_cfg(self, model: DSRNNConfig) -> dict[str, Any]:
         return model.actor_kwargs()
