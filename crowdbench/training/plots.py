@@ -43,21 +43,22 @@ def plot_curve(history: dict[str, list], evals: list[dict], path: str, title: st
 
 def plot_evals(history_files: list[str], path: str, bar: float = 0.95) -> None:
     """Quick-evaluation success of several runs against env steps and against wall-clock minutes: one colour per
-    PPO schedule (epochs × mini-batches), one line style per seed, the bar dotted."""
+    architecture and PPO schedule (epochs × mini-batches), one line style per seed, the bar dotted."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     runs = _load_runs(history_files)
-    schedules = sorted({_schedule(r["config"]) for r in runs}, key=lambda em: (-em[0], -em[1]))
+    schedules = sorted({(_architecture(r["config"]), *_schedule(r["config"])) for r in runs},
+                       key=lambda aem: (aem[0], -aem[1], -aem[2]))
     seeds = sorted({r["config"]["seed"] for r in runs})
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     styles = ["-", "--", ":", "-."]
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100)
     for r in runs:
         cfg, evals = r["config"], r["evals"]
-        kw = {"color": colours[schedules.index(_schedule(cfg)) % len(colours)],
+        kw = {"color": colours[schedules.index((_architecture(cfg), *_schedule(cfg))) % len(colours)],
               "linestyle": styles[seeds.index(cfg["seed"]) % len(styles)], "marker": "o", "markersize": 2.5,
               "label": _run_label(cfg)}
         succ = [e["success_rate"] for e in evals]
@@ -89,9 +90,25 @@ def _schedule(cfg: dict[str, Any]) -> tuple[int, int]:
     return cfg.get("epochs", 4), cfg.get("mini_batches", 4)
 
 
+def _architecture(cfg: dict[str, Any]) -> str:
+    """A saved run's architecture: H²INT's ``variant``, else the method with its named variant
+    (:meth:`PPOMethod.label <crowdbench.training.methods.PPOMethod.label>`, e.g. ``dsrnn-small``)."""
+    from crowdbench.training.methods import PPO_METHODS
+
+    model = cfg.get("model") or {}
+    if cfg.get("variant") or model.get("variant"):
+        return cfg.get("variant") or model["variant"]
+    method = cfg.get("method", "?")
+    try:
+        m = PPO_METHODS.get(method)()
+        return m.label(m.model_config(**{k: tuple(v) if isinstance(v, list) else v for k, v in model.items()}))
+    except (ValueError, TypeError):  # a method or field this version does not know
+        return method
+
+
 def _run_label(cfg: dict[str, Any]) -> str:
     epochs, mini_batches = _schedule(cfg)
-    name = cfg.get("variant") or (cfg.get("model") or {}).get("variant") or cfg.get("method", "?")
+    name = _architecture(cfg)
     return (f"{name} {epochs}×{mini_batches} seed {cfg['seed']}"
             f"{'' if cfg.get('anneal', True) else ' (no annealing, ρ = 0)'}")
 
