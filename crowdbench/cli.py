@@ -41,12 +41,12 @@ def demo(args: argparse.Namespace) -> int:
 
     name = getattr(args, "policy_pos", None) or args.policy or "orca"
     kwargs = {"layout": args.layout, "num_humans": args.humans, "human_model": args.human_model,
-              "human_model_kwargs": _model_kwargs(args.human_model, args.responsiveness), "render_mode": "rgb_array",
-              "observation": POLICIES.get(name).observation}
+              "human_model_kwargs": _model_kwargs(args.human_model, args.responsiveness), "render_mode": "rgb_array"}
     args.policy, args.policy_pos = name, None
     args.checkpoint = getattr(args, "checkpoint", None)
     policy = _policy(args, make_config(num_humans=args.humans))  # the env's config (envs.common.build_world)
-    env = CrowdParallelEnv(**kwargs, observation_kwargs=policy.observation_kwargs)
+    # the instance's observation: a checkpoint may choose it (DS-RNN's slot order)
+    env = CrowdParallelEnv(**kwargs, observation=policy.observation, observation_kwargs=policy.observation_kwargs)
     obs, _ = env.reset(seed=args.seed)
     frames = [env.render()]
     path, info = 0.0, {}

@@ -93,6 +93,7 @@ def _schedule(cfg: dict[str, Any]) -> tuple[int, int]:
 def _architecture(cfg: dict[str, Any]) -> str:
     """A saved run's architecture: H²INT's ``variant``, else the method with its named variant
     (:meth:`PPOMethod.label <crowdbench.training.methods.PPOMethod.label>`, e.g. ``dsrnn-small``)."""
+    from crowdbench.policies.recurrent import stored_config
     from crowdbench.training.methods import PPO_METHODS
 
     model = cfg.get("model") or {}
@@ -101,7 +102,7 @@ def _architecture(cfg: dict[str, Any]) -> str:
     method = cfg.get("method", "?")
     try:
         m = PPO_METHODS.get(method)()
-        return m.label(m.model_config(**{k: tuple(v) if isinstance(v, list) else v for k, v in model.items()}))
+        return m.label(stored_config(m.model_config, {"model": model}))
     except (ValueError, TypeError):  # a method or field this version does not know
         return method
 
