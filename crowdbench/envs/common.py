@@ -9,7 +9,7 @@ import numpy as np
 from gymnasium import spaces
 
 from crowdbench.config import WorldConfig, make_config
-from crowdbench.worlds.world import OUTCOMES, CrowdWorld, StepResult
+from crowdbench.worlds.world import CrowdWorld, StepResult
 
 
 def build_world(layout: str, num_humans: int, human_model: Any, human_model_kwargs: dict | None,
@@ -34,9 +34,7 @@ def robot_info(world: CrowdWorld, res: StepResult | None, crowd: dict[str, np.nd
     (``crowd``: the pedestrian model's ``info()``, fetched here when not given)."""
     info: dict[str, Any] = {"time": world.steps.item(0) * world.dt}
     if res is not None:
-        info.update(outcome=OUTCOMES[res.outcome.item(0)],
-                    reward_terms={k: v.item(0) for k, v in res.terms.items()}, d_min=res.d_min.item(0),
-                    human_overlaps=res.human_overlaps.item(0), robot_hit_obstacle=res.robot_hit_obstacle.item(0))
+        info.update(res.scalars(0))
     crowd = world.human_model.info() if crowd is None else crowd
     info["crowd"] = {k: v[0].copy() for k, v in crowd.items()}
     return info

@@ -140,16 +140,16 @@ def motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, 
 
 
 @nb.njit(cache=True)
-def outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
+def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
             max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
             change_due):  # pragma: no cover - numba
     """Everything decided after the motion, in place.
 
     Args (``B`` worlds of ``A`` agents):
         pos, vel, goal: ``(B, A, 2)`` after the move [m, m/s, m]. radius: ``(B, A)`` [m]. active: ``(B, A)`` bool.
-        moving: Out ``(B, A)`` bool: agents that moved and so face their velocity now (not the robot when
-            ``robot_turns``, a unicycle whose heading the action sets). The world takes the angle with numpy's
-            ``arctan2``, whose float64 results differ from libm's ``atan2`` in the last bit on some CPUs.
+        heading: ``(B, A)`` [rad], in/out: agents that moved face their velocity now (``atan2``, libm's: numpy's
+            ``arctan2`` differs from it in the last bit on CPUs where numpy vectorises it), the others keep theirs,
+            and so does the robot when ``robot_turns`` (a unicycle, whose heading its action sets).
         steps: ``(B,)`` in/out, incremented. prev_goal_dist: ``(B,)`` [m], in/out: becomes this step's distance.
         d_min: ``(B,)`` [m] and robot_hit ``(B,)`` from :func:`motion`. max_steps: episode limit [steps].
         rw: ``(7,)`` reward constants (success, collision, discomfort distance, discomfort scale, progress scale,
@@ -169,7 +169,8 @@ def outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min
     for b in range(B):
         for a in range(A):
             vx, vy = vel[b, a, 0], vel[b, a, 1]
-            moving[b, a] = vx * vx + vy * vy > 1e-12 and not (a == 0 and robot_turns)
+            if vx * vx + vy * vy > 1e-12 and not (a == 0 and robot_turns):
+                heading[b, a] = math.atan2(vy, vx)
         gx, gy = goal[b, 0, 0] - pos[b, 0, 0], goal[b, 0, 1] - pos[b, 0, 1]
         gdist = math.sqrt(gx * gx + gy * gy)
         success = gdist <= rw[6]
@@ -201,14 +202,14 @@ def outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min
 
 
 @nb.njit(cache=True)
-def advance(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot, goal, moving,
+def advance(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot, goal, heading,
             steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, terms, reward, result, terminated,
             truncated, overlaps, reached, change_due):  # pragma: no cover - numba
     """:func:`motion` then :func:`outcome` in one compiled call (a world step's arithmetic). Returns -1 when
     :func:`motion` refused non-finite velocities (nothing moved), else :func:`outcome`'s event bits."""
     if not motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot):
         return -1
-    return outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
+    return outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
                    max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
                    change_due)
 

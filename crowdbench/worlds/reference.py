@@ -7,9 +7,16 @@ the world itself runs the kernels.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from crowdbench.geometry import norm, pair_overlaps, swept_pair_min_distance, swept_segment_fraction
+
+
+def _atan2(y: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The C library's ``atan2`` element by element (numpy's ``arctan2`` is vectorised differently on some CPUs)."""
+    return np.array([math.atan2(a, b) for a, b in zip(y.tolist(), x.tolist(), strict=True)], dtype=np.float64)
 
 
 def clip_norm(v: np.ndarray, vmax: np.ndarray) -> np.ndarray:
@@ -42,13 +49,14 @@ def motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, 
     return True
 
 
-def outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
+def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
             max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
             change_due) -> int:
     """See :func:`crowdbench.worlds._kernels.outcome` (the paper's piecewise reward, first matching case wins)."""
-    moving[:] = np.einsum("bai,bai->ba", vel, vel) > 1e-12
+    moving = np.einsum("bai,bai->ba", vel, vel) > 1e-12
     if robot_turns:
         moving[:, 0] = False
+    heading[moving] = _atan2(vel[..., 1][moving], vel[..., 0][moving])  # libm's atan2, element by element
     gdist = norm(goal[:, 0] - pos[:, 0])
     success = gdist <= rw[6]
     collision = ((d_min <= 0.0) | robot_hit) & ~success
@@ -72,13 +80,13 @@ def outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min
     return int(reached.any()) | 2 * int(change_due.any())
 
 
-def advance(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot, goal, moving,
+def advance(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot, goal, heading,
             steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, terms, reward, result, terminated,
             truncated, overlaps, reached, change_due) -> int:
     """See :func:`crowdbench.worlds._kernels.advance`."""
     if not motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot):
         return -1
-    return outcome(pos, vel, goal, radius, active, moving, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
+    return outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
                    max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
                    change_due)
 

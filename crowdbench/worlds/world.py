@@ -21,7 +21,6 @@ Physics scheme (see README, "Physics"):
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 
 import numpy as np
 import pymunk
@@ -41,26 +40,65 @@ PARK = 1.0e4
 """Inactive pedestrian slots are parked this far away [m] (beyond every sensing and interaction range)."""
 
 
-@dataclass
 class StepResult:
-    """What one batched step produced. All arrays have leading dimension ``B``."""
+    """What one batched step produced: views into two blocks the step allocated (``(9, B)`` float64 rows — five
+    reward terms, reward, d_min, then outcome and overlaps stored as int64 — and ``(3, B)`` bool rows), so that
+    building it costs nothing and one world's figures come out in three ``tolist`` calls (:meth:`scalars`).
+    Every array has leading dimension ``B``; each access returns a fresh view of the same memory."""
 
-    reward: np.ndarray
-    """Robot reward ``(B,)`` = sum of ``terms``."""
-    terms: dict[str, np.ndarray]
-    """Named reward terms (:data:`REWARD_TERMS`), each ``(B,)``."""
-    terminated: np.ndarray
-    """``(B,)`` bool: success or collision."""
-    truncated: np.ndarray
-    """``(B,)`` bool: time limit reached without termination."""
-    outcome: np.ndarray
-    """``(B,)`` int: RUNNING, SUCCESS, COLLISION or TIMEOUT."""
-    d_min: np.ndarray
-    """Smallest robot–pedestrian surface distance during the step ``(B,)`` [m] (inf without pedestrians)."""
-    human_overlaps: np.ndarray
-    """Pedestrian pairs overlapping at the end of the step ``(B,)``."""
-    robot_hit_obstacle: np.ndarray
-    """``(B,)`` bool."""
+    __slots__ = ("_f", "_b")
+
+    def __init__(self, floats: np.ndarray, flags: np.ndarray) -> None:
+        self._f, self._b = floats, flags
+
+    @property
+    def reward(self) -> np.ndarray:
+        """Robot reward ``(B,)`` = sum of ``terms``."""
+        return self._f[5]
+
+    @property
+    def terms(self) -> dict[str, np.ndarray]:
+        """Named reward terms (:data:`REWARD_TERMS`), each ``(B,)``."""
+        f = self._f
+        return {name: f[i] for i, name in enumerate(REWARD_TERMS)}
+
+    @property
+    def terminated(self) -> np.ndarray:
+        """``(B,)`` bool: success or collision."""
+        return self._b[1]
+
+    @property
+    def truncated(self) -> np.ndarray:
+        """``(B,)`` bool: time limit reached without termination."""
+        return self._b[2]
+
+    @property
+    def outcome(self) -> np.ndarray:
+        """``(B,)`` int: RUNNING, SUCCESS, COLLISION or TIMEOUT."""
+        return self._f[7:].view(np.int64)[0]
+
+    @property
+    def d_min(self) -> np.ndarray:
+        """Smallest robot–pedestrian surface distance during the step ``(B,)`` [m] (inf without pedestrians)."""
+        return self._f[6]
+
+    @property
+    def human_overlaps(self) -> np.ndarray:
+        """Pedestrian pairs overlapping at the end of the step ``(B,)``."""
+        return self._f[7:].view(np.int64)[1]
+
+    @property
+    def robot_hit_obstacle(self) -> np.ndarray:
+        """``(B,)`` bool."""
+        return self._b[0]
+
+    def scalars(self, world: int = 0) -> dict:
+        """World ``world``'s figures as Python scalars: ``outcome`` (name), ``reward_terms`` (dict), ``d_min``,
+        ``human_overlaps``, ``robot_hit_obstacle``."""
+        f = self._f[:7, world].tolist()
+        outcome, overlaps = self._f[7:].view(np.int64)[:, world].tolist()
+        return {"outcome": OUTCOMES[outcome], "reward_terms": dict(zip(REWARD_TERMS, f, strict=False)), "d_min": f[6],
+                "human_overlaps": overlaps, "robot_hit_obstacle": self._b.item(0, world)}
 
 
 class CrowdWorld:
@@ -132,7 +170,7 @@ class CrowdWorld:
         self._unicycle = config.kinematics == "unicycle"
         self._max_steps = config.max_steps
         self._scratch = {"disp": np.zeros((B, A, 2)), "reached": np.zeros((B, H), dtype=bool),
-                         "moving": np.zeros((B, A), dtype=bool), "change_due": np.zeros(B, dtype=bool)}
+                         "change_due": np.zeros(B, dtype=bool)}
         self._state: CrowdState | None = None
         self.reset(seeds=list(range(B)))
         self.physics.verify()
@@ -292,25 +330,21 @@ class CrowdWorld:
         else:  # the kernel clips it to v_pref
             self.vel[:, 0] = np.asarray(robot_action, dtype=np.float64).reshape(B, 2)
         scratch = self._scratch
-        floats, ints, flags = np.empty((7, B)), np.empty((2, B), dtype=np.int64), np.empty((3, B), dtype=bool)
-        terms, reward, d_min = floats[:5], floats[5], floats[6]  # the result's arrays: rows of three blocks
-        result, overlaps = ints
-        robot_hit, terminated, truncated = flags
-        reached, moving, change_due = scratch["reached"], scratch["moving"], scratch["change_due"]
+        floats, flags = np.empty((9, B)), np.empty((3, B), dtype=bool)  # the StepResult's two blocks
+        terms, reward, d_min, ints = floats[:5], floats[5], floats[6], floats[7:].view(np.int64)
+        reached, change_due = scratch["reached"], scratch["change_due"]
         events = advance(self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges, self.dt, 20,
-                         scratch["disp"], robot_hit, d_min, not unicycle, self.goal, moving, self.steps,
+                         scratch["disp"], flags[0], d_min, not unicycle, self.goal, self.heading, self.steps,
                          self.prev_goal_dist, unicycle, self._max_steps, self._rw, self._change_every, terms, reward,
-                         result, terminated, truncated, overlaps, reached, change_due)
+                         ints[0], flags[1], flags[2], ints[1], reached, change_due)
         if events < 0:
             raise self._non_finite(human_override)
         self.physics.sync(self.pos)
-        np.copyto(self.heading, np.arctan2(self.vel[..., 1], self.vel[..., 0]), where=moving)
         if events & 1:
             self._renew_goals(reached)
         if events & 2:
             self._change_goals(np.flatnonzero(change_due))
-        return StepResult(reward, dict(zip(REWARD_TERMS, terms, strict=True)), terminated, truncated, result, d_min,
-                          overlaps, robot_hit)
+        return StepResult(floats, flags)
 
     def _human_velocities(self, state: CrowdState) -> np.ndarray:
         """The pedestrian model's velocities ``(B, H, 2)``; a model that raises or returns the wrong shape, NaN or

@@ -102,18 +102,24 @@ def test_outcome_kernel_equals_reference(seed):
     d_min = rng.choice([-0.1, 0.0, 0.1, 0.3, np.inf], B)
     hit = rng.random(B) < 0.2
     rw = np.array([10.0, -20.0, 0.25, 10.0, 4.0, -0.025, 0.3])
+    heading0 = rng.uniform(-np.pi, np.pi, (B, A))
     out = []
     for fn in (_kernels.outcome, reference.outcome):
         steps = rng.integers(0, 10, B) if fn is _kernels.outcome else out[0][-1]
         st, prev = steps.copy(), np.full(B, 2.0)
-        arrays = (np.empty((B, A), bool), np.empty((5, B)), np.empty(B), np.empty(B, np.int64), np.empty(B, bool),
+        arrays = (heading0.copy(), np.empty((5, B)), np.empty(B), np.empty(B, np.int64), np.empty(B, bool),
                   np.empty(B, bool), np.empty(B, np.int64), np.empty((B, A - 1), bool), np.empty(B, bool))
-        moving, terms, reward, result, term, trunc, overlaps, reached, due = arrays
-        events = fn(pos, vel, goal, radius, active, moving, st, prev, d_min, hit, bool(seed % 2), 5, rw, 3, terms,
+        heading, terms, reward, result, term, trunc, overlaps, reached, due = arrays
+        events = fn(pos, vel, goal, radius, active, heading, st, prev, d_min, hit, bool(seed % 2), 5, rw, 3, terms,
                     reward, result, term, trunc, overlaps, reached, due)
         out.append((events, st, prev, *arrays, steps))
     for a, b in zip(out[0][:-1], out[1][:-1], strict=True):
         np.testing.assert_array_equal(a, b)
+    rest = (vel == 0.0).all(-1)
+    if seed % 2:  # a unicycle robot keeps the heading its action set
+        rest[:, 0] = True
+    np.testing.assert_array_equal(out[0][3][rest], heading0[rest])  # resting agents keep their heading
+    np.testing.assert_allclose(out[0][3][~rest], np.arctan2(vel[..., 1], vel[..., 0])[~rest], rtol=1e-15)
 
 
 @pytest.mark.parametrize("features,max_range", [(2, 5.0), (5, np.inf), (2, 0.0)])
