@@ -87,7 +87,8 @@ class HumanModel(ABC):
     def step(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         """Return the pedestrians' velocities for this step, ``(B, H, 2)`` [m/s].
 
-        ``rngs[b]`` is world ``b``'s episode generator: the only source of randomness a model may use.
+        ``rngs[b]`` is world ``b``'s episode generator: the only source of randomness a model may use. Callers copy
+        the result before the next call, so it may be a view of the model's own buffer.
         """
 
     def info(self) -> dict[str, np.ndarray]:

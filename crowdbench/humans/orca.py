@@ -72,20 +72,15 @@ class ORCABase(HumanModel):
         super().bind(num_worlds, num_humans, obstacles, time_step)
         p, B, A = self.params, num_worlds, num_humans + 1
         self._obst = build_obstacles(obstacles) if obstacles else build_obstacles([])
-        self._nd = np.full((B, A), p.neighbor_dist)
-        self._mn = np.full((B, A), p.neighbors(A), dtype=np.int64)
-        self._th = np.full((B, A), p.time_horizon)
-        self._tho = np.full((B, A), p.time_horizon_obst)
-        self._controlled = np.ones((B, A), dtype=bool)
-        self._controlled[:, 0] = False
-        self._out = np.zeros((B, A, 2))
-        self._pos = np.zeros((B, A, 2))
-        self._vel = np.zeros((B, A, 2))
-        self._pref = np.zeros((B, A, 2))
-        self._rad = np.zeros((B, A))
-        self._vmax = np.zeros((B, A))
-        self._active = np.zeros((B, A), dtype=bool)
-        self._ignore = np.full((B, A), -1, dtype=np.int64)
+        # orca_step's agent arrays [robot, pedestrians...] in four blocks (fewer arguments to pass per call):
+        self._vec = np.zeros((4, B, A, 2))  # positions, velocities, preferred velocities, output [m, m/s]
+        self._flt = np.zeros((5, B, A))  # radii, max speeds, neighbour distance, time horizons (agents, obstacles)
+        self._flt[2:] = np.array([p.neighbor_dist, p.time_horizon, p.time_horizon_obst])[:, None, None]
+        self._int = np.full((2, B, A), -1, dtype=np.int64)  # neighbour caps, robot slot to ignore (-1: nobody)
+        self._int[0] = p.neighbors(A)
+        self._flags = np.ones((2, B, A), dtype=bool)  # active, controlled (not the robot: the world moves it)
+        self._flags[1, :, 0] = False
+        self._out = self._vec[3]
         self._seen, self._hidden = np.zeros((B, num_humans), dtype=bool), np.ones((B, num_humans), dtype=bool)
 
     def robot_ignored(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
@@ -96,14 +91,14 @@ class ORCABase(HumanModel):
         """ORCA velocities ``(B, H, 2)`` [m/s] in one compiled call (:func:`orca_step`: ``orca_inputs`` fills the
         agent arrays — :func:`~crowdbench.humans.preferred_velocity` toward each goal —, ``orca_batch`` solves)."""
         pad = self.params.radius_pad + self.params.safety_space
-        ignore_robot = np.asarray(self.robot_ignored(state, rngs), dtype=bool)
-        if ignore_robot.shape != state.active.shape:
-            ignore_robot = np.broadcast_to(ignore_robot, state.active.shape)
+        ignore_robot = self.robot_ignored(state, rngs)
+        if ignore_robot.__class__ is not np.ndarray or ignore_robot.dtype != np.bool_ \
+                or ignore_robot.shape != state.active.shape:
+            ignore_robot = np.broadcast_to(np.asarray(ignore_robot, dtype=bool), state.active.shape)
         orca_step(state.robot_position, state.robot_velocity, state.robot_radius, state.positions, state.velocities,
-                  state.goals, state.radii, state.v_pref, state.active, ignore_robot, pad, state.time_step, self._pos,
-                  self._vel, self._pref, self._rad, self._vmax, self._active, self._ignore, self._nd, self._mn,
-                  self._th, self._tho, self._controlled, *self._obst, self._out)
-        return self._out[:, 1:].copy()
+                  state.goals, state.radii, state.v_pref, state.active, ignore_robot, pad, state.time_step, self._vec,
+                  self._flt, self._int, self._flags, *self._obst)
+        return self._out[:, 1:]  # a view, rewritten by the next step (the world copies it)
 
 
 @register("orca")

@@ -483,10 +483,15 @@ def orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals
 
 @nb.njit(cache=True)
 def orca_step(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active, ignore_robot,
-              pad, dt, pos, vel, pref, rad, vmax, act, ignore, neighbor_dist, max_neighbors, time_horizon,
-              time_horizon_obst, controlled, opoint, onext, oprev, odir, oconvex, out):  # pragma: no cover - numba
-    """:func:`orca_inputs` then :func:`orca_batch` in one compiled call (the pedestrian model's step)."""
+              pad, dt, vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex):  # pragma: no cover - numba
+    """:func:`orca_inputs` then :func:`orca_batch` in one compiled call (the pedestrian model's step), on agent
+    arrays packed in blocks (one argument each instead of thirteen): ``vec`` ``(4, B, A, 2)`` — positions,
+    velocities, preferred velocities, out: new velocities —, ``flt`` ``(5, B, A)`` — radii, max speeds (both
+    filled here), neighbour distances, time horizons for agents and for obstacles —, ``ints`` ``(2, B, A)`` —
+    neighbour caps, ignored slot (filled here) —, ``flags`` ``(2, B, A)`` bool — active (filled here), controlled."""
+    pos, vel, pref, out = vec[0], vec[1], vec[2], vec[3]
+    rad, vmax, act, ignore = flt[0], flt[1], flags[0], ints[1]
     orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active, ignore_robot,
                 pad, dt, pos, vel, pref, rad, vmax, act, ignore)
-    orca_batch(pos, vel, pref, rad, vmax, neighbor_dist, max_neighbors, time_horizon, time_horizon_obst, act,
-               controlled, ignore, opoint, onext, oprev, odir, oconvex, dt, out)
+    orca_batch(pos, vel, pref, rad, vmax, flt[2], ints[0], flt[3], flt[4], act, flags[1], ignore, opoint, onext,
+               oprev, odir, oconvex, dt, out)

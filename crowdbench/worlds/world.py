@@ -41,15 +41,16 @@ PARK = 1.0e4
 
 
 class StepResult:
-    """What one batched step produced: views into two blocks the step allocated (``(9, B)`` float64 rows — five
-    reward terms, reward, d_min, then outcome and overlaps stored as int64 — and ``(3, B)`` bool rows), so that
-    building it costs nothing and one world's figures come out in three ``tolist`` calls (:meth:`scalars`).
-    Every array has leading dimension ``B``; each access returns a fresh view of the same memory."""
+    """What one batched step produced: views into the three blocks the step allocated — ``(7, B)`` float64 rows
+    (five reward terms, reward, d_min), ``(2, B)`` int64 (outcome, overlaps), ``(3, B)`` bool (obstacle hit,
+    terminated, truncated) —, so that building it costs nothing and one world's figures come out in a few calls
+    (:meth:`scalars`). Every array has leading dimension ``B``; each access returns a fresh view of the same
+    memory."""
 
-    __slots__ = ("_f", "_b")
+    __slots__ = ("_f", "_i", "_b")
 
-    def __init__(self, floats: np.ndarray, flags: np.ndarray) -> None:
-        self._f, self._b = floats, flags
+    def __init__(self, floats: np.ndarray, ints: np.ndarray, flags: np.ndarray) -> None:
+        self._f, self._i, self._b = floats, ints, flags
 
     @property
     def reward(self) -> np.ndarray:
@@ -75,7 +76,7 @@ class StepResult:
     @property
     def outcome(self) -> np.ndarray:
         """``(B,)`` int: RUNNING, SUCCESS, COLLISION or TIMEOUT."""
-        return self._f[7:].view(np.int64)[0]
+        return self._i[0]
 
     @property
     def d_min(self) -> np.ndarray:
@@ -85,7 +86,7 @@ class StepResult:
     @property
     def human_overlaps(self) -> np.ndarray:
         """Pedestrian pairs overlapping at the end of the step ``(B,)``."""
-        return self._f[7:].view(np.int64)[1]
+        return self._i[1]
 
     @property
     def robot_hit_obstacle(self) -> np.ndarray:
@@ -95,10 +96,9 @@ class StepResult:
     def scalars(self, world: int = 0) -> dict:
         """World ``world``'s figures as Python scalars: ``outcome`` (name), ``reward_terms`` (dict), ``d_min``,
         ``human_overlaps``, ``robot_hit_obstacle``."""
-        f = self._f[:7, world].tolist()
-        outcome, overlaps = self._f[7:].view(np.int64)[:, world].tolist()
-        return {"outcome": OUTCOMES[outcome], "reward_terms": dict(zip(REWARD_TERMS, f, strict=False)), "d_min": f[6],
-                "human_overlaps": overlaps, "robot_hit_obstacle": self._b.item(0, world)}
+        f = self._f[:, world].tolist()
+        return {"outcome": OUTCOMES[self._i.item(0, world)], "reward_terms": dict(zip(REWARD_TERMS, f, strict=False)),
+                "d_min": f[6], "human_overlaps": self._i.item(1, world), "robot_hit_obstacle": self._b.item(0, world)}
 
 
 class CrowdWorld:
@@ -169,8 +169,8 @@ class CrowdWorld:
                              rw.time_penalty, rw.goal_tolerance])
         self._unicycle = config.kinematics == "unicycle"
         self._max_steps = config.max_steps
-        self._scratch = {"disp": np.zeros((B, A, 2)), "reached": np.zeros((B, H), dtype=bool),
-                         "change_due": np.zeros(B, dtype=bool)}
+        self._disp = np.zeros((B, A, 2))  # scratch of the step kernel
+        self._reached, self._change_due = np.zeros((B, H), dtype=bool), np.zeros(B, dtype=bool)  # its event outputs
         self._state: CrowdState | None = None
         self.reset(seeds=list(range(B)))
         self.physics.verify()
@@ -329,22 +329,19 @@ class CrowdWorld:
             self.vel[:, 0] = self.robot_velocity(robot_action)
         else:  # the kernel clips it to v_pref
             self.vel[:, 0] = np.asarray(robot_action, dtype=np.float64).reshape(B, 2)
-        scratch = self._scratch
-        floats, flags = np.empty((9, B)), np.empty((3, B), dtype=bool)  # the StepResult's two blocks
-        terms, reward, d_min, ints = floats[:5], floats[5], floats[6], floats[7:].view(np.int64)
-        reached, change_due = scratch["reached"], scratch["change_due"]
-        events = advance(self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges, self.dt, 20,
-                         scratch["disp"], flags[0], d_min, not unicycle, self.goal, self.heading, self.steps,
-                         self.prev_goal_dist, unicycle, self._max_steps, self._rw, self._change_every, terms, reward,
-                         ints[0], flags[1], flags[2], ints[1], reached, change_due)
+        floats, ints, flags = np.empty((7, B)), np.empty((2, B), dtype=np.int64), np.empty((3, B), dtype=bool)
+        events = advance(self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges, self.dt, 20, self._disp,
+                         not unicycle, self.goal, self.heading, self.steps, self.prev_goal_dist, unicycle,
+                         self._max_steps, self._rw, self._change_every, floats, ints, flags, self._reached,
+                         self._change_due)
         if events < 0:
             raise self._non_finite(human_override)
         self.physics.sync(self.pos)
         if events & 1:
-            self._renew_goals(reached)
+            self._renew_goals(self._reached)
         if events & 2:
-            self._change_goals(np.flatnonzero(change_due))
-        return StepResult(floats, flags)
+            self._change_goals(np.flatnonzero(self._change_due))
+        return StepResult(floats, ints, flags)
 
     def _human_velocities(self, state: CrowdState) -> np.ndarray:
         """The pedestrian model's velocities ``(B, H, 2)``; a model that raises or returns the wrong shape, NaN or
