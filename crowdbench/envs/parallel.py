@@ -120,12 +120,12 @@ class CrowdParallelEnv(ParallelEnv):
                 override[0, i] = True
         res = self.world.step(actions["robot"], human_actions, override)
         self._cycles += 1
-        robot_done = bool(res.terminated[0])
-        trunc = bool(res.truncated[0]) or (self.max_cycles is not None and self._cycles >= self.max_cycles)
+        robot_done, trunc = res.done(0)
+        trunc = trunc or (self.max_cycles is not None and self._cycles >= self.max_cycles)
         obs = self._observations()
         agents = self.agents
         rewards = dict.fromkeys(agents, 0.0)
-        rewards["robot"] = float(res.reward[0])
+        rewards["robot"] = res.reward.item(0)
         terminations = dict.fromkeys(agents, False)
         terminations["robot"] = robot_done
         truncations = dict.fromkeys(agents, trunc or robot_done)
@@ -142,7 +142,8 @@ class CrowdParallelEnv(ParallelEnv):
     def _observations(self) -> dict[str, dict[str, np.ndarray]]:
         """Every live agent's observation: views into one batched array per field (``agents[1:]`` are
         ``human_0 … human_{n-1}`` in order, so row ``i`` belongs to ``human_i``)."""
-        obs = {"robot": {k: v[0] for k, v in self._obs_builder.build(self.world).items()}}
+        robot = self._obs_builder.build(self.world)
+        obs = {"robot": {k: v[0] for k, v in robot.items()}}
         if len(self.agents) > 1:
             h = human_observations(self.world, 0)
             for agent, me, nb, mask in zip(self.agents[1:], h["self"], h["neighbors"], h["mask"], strict=False):

@@ -67,6 +67,8 @@ class PymunkWorlds:
             return
         self._keep: list = []
         self._set_pos = [self._data(self._pos[b], pmb.BodyFields.POSITION) for b in range(B)]
+        self._sync_calls = [(space._space, d, d.floatArray) for space, d in zip(self.spaces, self._set_pos,
+                                                                                strict=True)]
         self._set_fn = ffi.addressof(lib, "pmSpaceBodySetIteratorFuncBatched")
 
     @staticmethod
@@ -139,9 +141,9 @@ class PymunkWorlds:
                 pmb.set_space_bodies(space, pmb.BodyFields.POSITION, self._buffer(self._pos[b]))
             return
         set_fn, each = self._set_fn, lib.cpSpaceEachBody
-        for space, d in zip(self.spaces, self._set_pos, strict=True):
-            d.floatArray.num = 0
-            each(space._space, set_fn, d)
+        for space, d, read in self._sync_calls:
+            read.num = 0  # the C iterator's read cursor into the position rows
+            each(space, set_fn, d)
 
     @staticmethod
     def _buffer(rows: np.ndarray) -> pmb.Buffer:

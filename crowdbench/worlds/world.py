@@ -93,6 +93,10 @@ class StepResult:
         """``(B,)`` bool."""
         return self._b[0]
 
+    def done(self, world: int = 0) -> tuple[bool, bool]:
+        """World ``world``'s ``(terminated, truncated)`` as Python bools."""
+        return self._b.item(1, world), self._b.item(2, world)
+
     def scalars(self, world: int = 0) -> dict:
         """World ``world``'s figures as Python scalars: ``outcome`` (name), ``reward_terms`` (dict), ``d_min``,
         ``human_overlaps``, ``robot_hit_obstacle``."""
@@ -170,6 +174,7 @@ class CrowdWorld:
         self._unicycle = config.kinematics == "unicycle"
         self._max_steps = config.max_steps
         self._disp = np.zeros((B, A, 2))  # scratch of the step kernel
+        self._still = np.zeros((B, 0, 2))  # the pedestrians' velocities when there are none
         self._reached, self._change_due = np.zeros((B, H), dtype=bool), np.zeros(B, dtype=bool)  # its event outputs
         self._state: CrowdState | None = None
         self.reset(seeds=list(range(B)))
@@ -319,21 +324,19 @@ class CrowdWorld:
         :mod:`crowdbench.worlds.reference`); pymunk's bodies follow in one call per world.
         """
         B = self.num_worlds
+        hv = self._still  # (B, 0, 2) without pedestrians
         if self.num_humans:  # from the pre-step state
             hv = self._human_velocities(self.crowd_state())
             if human_override is not None and human_override.any():
                 hv = np.where(human_override[..., None], human_actions, hv)
-            self.vel[:, 1:] = hv
         unicycle = self._unicycle
-        if unicycle:
-            self.vel[:, 0] = self.robot_velocity(robot_action)
-        else:  # the kernel clips it to v_pref
-            self.vel[:, 0] = np.asarray(robot_action, dtype=np.float64).reshape(B, 2)
+        # the kernel copies both into vel (and clips the holonomic robot's to v_pref)
+        rv = self.robot_velocity(robot_action) if unicycle else np.asarray(robot_action, dtype=np.float64)
         floats, ints, flags = np.empty((7, B)), np.empty((2, B), dtype=np.int64), np.empty((3, B), dtype=bool)
-        events = advance(self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges, self.dt, 20, self._disp,
-                         not unicycle, self.goal, self.heading, self.steps, self.prev_goal_dist, unicycle,
-                         self._max_steps, self._rw, self._change_every, floats, ints, flags, self._reached,
-                         self._change_due)
+        events = advance(rv.reshape(B, 2), hv, self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges,
+                         self.dt, 20, self._disp, not unicycle, self.goal, self.heading, self.steps,
+                         self.prev_goal_dist, unicycle, self._max_steps, self._rw, self._change_every, floats, ints,
+                         flags, self._reached, self._change_due)
         if events < 0:
             raise self._non_finite(human_override)
         self.physics.sync(self.pos)
