@@ -32,11 +32,10 @@ def robot_action_space(config: WorldConfig) -> spaces.Box:
 def robot_info(world: CrowdWorld, res: StepResult | None, crowd: dict[str, np.ndarray] | None = None) -> dict[str, Any]:
     """The robot's info dict for world 0: outcome, named reward terms, clearance, overlaps, crowd analysis arrays
     (``crowd``: the pedestrian model's ``info()``, fetched here when not given)."""
-    info: dict[str, Any] = {"time": world.steps.item(0) * world.dt}
-    if res is not None:
-        info.update(res.scalars(0))
+    info: dict[str, Any] = {} if res is None else res.scalars(0)
+    info["time"] = world.steps.item(0) * world.dt
     crowd = world.human_model.info() if crowd is None else crowd
-    info["crowd"] = {k: v[0].copy() for k, v in crowd.items()}
+    info["crowd"] = {k: v[0].copy() for k, v in crowd.items()} if crowd else {}
     return info
 
 

@@ -128,8 +128,8 @@ def human_observations(world, b: int) -> dict[str, np.ndarray]:
     cfg = world.config
     H, n = world.num_humans, cfg.max_humans_observed
     me, nb, mask = np.empty((H, 9), np.float32), np.empty((H, n, 5), np.float32), np.empty((H, n), np.float32)
-    human_observation(world.pos[b], world.vel[b], world.goal[b], world.radius[b], world.v_pref[b], world.heading[b],
-                      world.active[b], cfg.human_sensing_range, cfg.robot_visible, me, nb, mask)
+    human_observation(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading, world.active, b,
+                      cfg.human_sensing_range, cfg.robot_visible, me, nb, mask)
     return {"self": me, "neighbors": nb, "mask": mask}
 
 

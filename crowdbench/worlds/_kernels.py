@@ -287,12 +287,13 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
 
 
 @nb.njit(cache=True)
-def human_observation(pos, vel, goal, radius, v_pref, heading, active, sensing_range, robot_visible, me,
+def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, sensing_range, robot_visible, me,
                       neighbors, mask):  # pragma: no cover - numba
-    """Every pedestrian slot's own observation of one world, in place.
+    """Every pedestrian slot's own observation of world ``world``, in place.
 
-    Args (``A`` agents, ``H = A - 1`` pedestrians, ``n`` observed slots):
-        pos, vel, goal: ``(A, 2)`` of the world. radius, v_pref, heading: ``(A,)``. active: ``(A,)`` bool.
+    Args (``B`` worlds of ``A`` agents, ``H = A - 1`` pedestrians, ``n`` observed slots):
+        pos, vel, goal: ``(B, A, 2)``. radius, v_pref, heading: ``(B, A)``. active: ``(B, A)`` bool. world: the
+            world to observe (the batch is passed whole: cheaper than seven views).
         sensing_range: Neighbours farther than this [m] are left out. robot_visible: whether the robot (agent 0)
             can be a neighbour.
         me: Out ``(H, 9)`` float32 = [px, py, vx, vy, gx, gy, r, v_pref, θ].
@@ -301,6 +302,8 @@ def human_observation(pos, vel, goal, radius, v_pref, heading, active, sensing_r
         mask: Out ``(H, n)`` float32.
 
     """
+    pos, vel, goal, radius, v_pref = pos[world], vel[world], goal[world], radius[world], v_pref[world]
+    heading, active = heading[world], active[world]
     A = radius.shape[0]
     n = neighbors.shape[1]
     dist = np.empty(max(n, 1))

@@ -115,9 +115,11 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
     mask[:, :k] = valid
 
 
-def human_observation(pos, vel, goal, radius, v_pref, heading, active, sensing_range, robot_visible, me,
+def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, sensing_range, robot_visible, me,
                       neighbors, mask) -> None:
     """See :func:`crowdbench.worlds._kernels.human_observation`."""
+    pos, vel, goal, radius, v_pref = pos[world], vel[world], goal[world], radius[world], v_pref[world]
+    heading, active = heading[world], active[world]
     me[:] = np.concatenate([pos[1:], vel[1:], goal[1:], radius[1:, None], v_pref[1:, None], heading[1:, None]], 1)
     rel = pos[None, :] - pos[1:, None]  # (H, A, 2): agent j relative to pedestrian i
     dist = norm(rel)

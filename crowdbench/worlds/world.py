@@ -175,6 +175,7 @@ class CrowdWorld:
         self._max_steps = config.max_steps
         self._disp = np.zeros((B, A, 2))  # scratch of the step kernel
         self._still = np.zeros((B, 0, 2))  # the pedestrians' velocities when there are none
+        self._hv_shape = (B, H, 2)
         self._reached, self._change_due = np.zeros((B, H), dtype=bool), np.zeros(B, dtype=bool)  # its event outputs
         self._state: CrowdState | None = None
         self.reset(seeds=list(range(B)))
@@ -354,7 +355,7 @@ class CrowdWorld:
         except Exception as e:
             name = type(self.human_model).__name__
             raise PedestrianModelError(f"pedestrian model {name} failed: {type(e).__name__}: {e}") from e
-        if hv.shape != (self.num_worlds, self.num_humans, 2):
+        if hv.shape != self._hv_shape:
             name = type(self.human_model).__name__
             raise PedestrianModelError(f"pedestrian model {name} returned velocities of shape {hv.shape}; expected "
                                        f"({self.num_worlds}, {self.num_humans}, 2)")
@@ -407,13 +408,14 @@ class CrowdWorld:
         """Random goal changes in ``worlds`` (their episode step is a multiple of the layout's interval): each active
         pedestrian takes a new goal (:meth:`Layout.changed_goals`) with the layout's probability."""
         m, p = self.layout.renew_uniforms, self.layout.goal_change_prob
-        for b in worlds:
+        for b in worlds.tolist():
             slots = np.flatnonzero(self.active[b, 1:]) + 1
             u = self.rngs[b].random((len(slots), 1 + m))
-            change = slots[u[:, 0] < p]
+            pick = u[:, 0] < p
+            change = slots[pick]
             if len(change):
-                self.goal[b, change] = self.layout.changed_goals(u[u[:, 0] < p, 1:], self.pos[b, change],
-                                                                 self.goal[b, change])
+                goal = self.goal[b]
+                goal[change] = self.layout.changed_goals(u[pick, 1:], self.pos[b, change], goal[change])
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:

@@ -146,14 +146,14 @@ def test_robot_observation_kernel_equals_reference(features, max_range, slots, b
 @pytest.mark.parametrize("seed", range(4))
 def test_human_observation_kernel_equals_reference(visible, slots, seed):
     rng = np.random.default_rng(seed)
-    A = int(rng.integers(1, 14))
-    pos, vel, goal, radius, v_pref, active = (x[0] for x in _scene(rng, 1, A))
-    heading = rng.uniform(-3, 3, A)
+    B, A = 3, int(rng.integers(1, 14))
+    pos, vel, goal, radius, v_pref, active = _scene(rng, B, A)
+    heading = rng.uniform(-3, 3, (B, A))
     out = []
     for fn in (_kernels.human_observation, reference.human_observation):
         arrays = (np.empty((A - 1, 9), np.float32), np.empty((A - 1, slots, 5), np.float32),
                   np.empty((A - 1, slots), np.float32))
-        fn(pos, vel, goal, radius, v_pref, heading, active, 3.0, visible, *arrays)
+        fn(pos, vel, goal, radius, v_pref, heading, active, seed % B, 3.0, visible, *arrays)
         out.append(arrays)
     for a, b in zip(*out, strict=True):
         np.testing.assert_array_equal(a, b)
