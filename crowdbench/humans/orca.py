@@ -81,6 +81,7 @@ class ORCABase(HumanModel):
         self._flags = np.ones((2, B, A), dtype=bool)  # active, controlled (not the robot: the world moves it)
         self._flags[1, :, 0] = False
         self._out = self._vec[3]
+        self._pad = p.radius_pad + p.safety_space  # added to every radius [m]
         self._seen, self._hidden = np.zeros((B, num_humans), dtype=bool), np.ones((B, num_humans), dtype=bool)
 
     def robot_ignored(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
@@ -90,14 +91,13 @@ class ORCABase(HumanModel):
     def step(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         """ORCA velocities ``(B, H, 2)`` [m/s] in one compiled call (:func:`orca_step`: ``orca_inputs`` fills the
         agent arrays — :func:`~crowdbench.humans.preferred_velocity` toward each goal —, ``orca_batch`` solves)."""
-        pad = self.params.radius_pad + self.params.safety_space
         ignore_robot = self.robot_ignored(state, rngs)
         if ignore_robot.__class__ is not np.ndarray or ignore_robot.dtype != np.bool_ \
                 or ignore_robot.shape != state.active.shape:
             ignore_robot = np.broadcast_to(np.asarray(ignore_robot, dtype=bool), state.active.shape)
         orca_step(state.robot_position, state.robot_velocity, state.robot_radius, state.positions, state.velocities,
-                  state.goals, state.radii, state.v_pref, state.active, ignore_robot, pad, state.time_step, self._vec,
-                  self._flt, self._int, self._flags, *self._obst)
+                  state.goals, state.radii, state.v_pref, state.active, ignore_robot, self._pad, state.time_step,
+                  self._vec, self._flt, self._int, self._flags, *self._obst)
         return self._out[:, 1:]  # a view, rewritten by the next step (the world copies it)
 
 

@@ -204,13 +204,14 @@ def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_mi
 @nb.njit(cache=True)
 def advance(robot_vel, human_vel, pos, vel, v_pref, radius, active, edges, dt, iters, disp, clip_robot, goal, heading,
             steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, floats, ints, flags, reached,
-            change_due):  # pragma: no cover - numba
+            change_due, mirror):  # pragma: no cover - numba
     """The new velocities into ``vel`` (``robot_vel`` ``(B, 2)``, ``human_vel`` ``(B, A - 1, 2)`` [m/s]), then
     :func:`motion` then :func:`outcome` in one compiled call (a world step's arithmetic), writing the step's
     figures into three blocks (fewer arguments to pass): ``floats`` ``(7, B)`` — five reward terms, reward, d_min —,
     ``ints`` ``(2, B)`` — outcome, pedestrian overlaps —, ``flags`` ``(3, B)`` bool — robot hit an obstacle,
-    terminated, truncated. Returns -1 when :func:`motion` refused non-finite velocities (nothing moved), else
-    :func:`outcome`'s event bits."""
+    terminated, truncated. ``mirror`` ``(B, ≥ A, 2)``: out, the new positions again (pymunk's synchronisation
+    rows). Returns -1 when :func:`motion` refused non-finite velocities (nothing moved), else :func:`outcome`'s
+    event bits."""
     terms, reward, d_min, result, overlaps = floats[:5], floats[5], floats[6], ints[0], ints[1]
     robot_hit, terminated, truncated = flags[0], flags[1], flags[2]
     B, A = radius.shape
@@ -220,6 +221,9 @@ def advance(robot_vel, human_vel, pos, vel, v_pref, radius, active, edges, dt, i
             vel[b, h, 0], vel[b, h, 1] = human_vel[b, h - 1, 0], human_vel[b, h - 1, 1]
     if not motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot):
         return -1
+    for b in range(B):
+        for a in range(A):
+            mirror[b, a, 0], mirror[b, a, 1] = pos[b, a, 0], pos[b, a, 1]
     return outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
                    max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
                    change_due)

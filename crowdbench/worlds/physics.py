@@ -131,11 +131,19 @@ class PymunkWorlds:
             d.floatArray.num = 0
             lib.cpSpaceEachBody(self.spaces[b]._space, self._set_fn, d)
 
-    def sync(self, positions: np.ndarray) -> None:
-        """Move every agent body to ``positions`` ``(B, A, 2)`` [m]: one C call per world (the world's motion
-        kernel integrates ``p ← p + v·dt`` itself, bit for bit what ``cpSpaceStep`` does to a kinematic body)."""
+    @property
+    def mirror(self) -> np.ndarray:
+        """``(B, A + slack, 2)`` [m]: the rows the bodies are set from; the world's step kernel writes the new
+        positions into ``mirror[:, :A]`` so that :meth:`sync` needs no copy."""
+        return self._pos
+
+    def sync(self, positions: np.ndarray | None = None) -> None:
+        """Move every agent body to ``positions`` ``(B, A, 2)`` [m] (``None``: to what :attr:`mirror` holds): one C
+        call per world (the world's motion kernel integrates ``p ← p + v·dt`` itself, bit for bit what
+        ``cpSpaceStep`` does to a kinematic body)."""
         A = self.num_agents
-        self._pos[:, :A] = positions
+        if positions is not None:
+            self._pos[:, :A] = positions
         if not self.fast:
             for b, space in enumerate(self.spaces):
                 pmb.set_space_bodies(space, pmb.BodyFields.POSITION, self._buffer(self._pos[b]))

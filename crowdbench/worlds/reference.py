@@ -82,13 +82,14 @@ def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_mi
 
 def advance(robot_vel, human_vel, pos, vel, v_pref, radius, active, edges, dt, iters, disp, clip_robot, goal, heading,
             steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, floats, ints, flags, reached,
-            change_due) -> int:
+            change_due, mirror) -> int:
     """See :func:`crowdbench.worlds._kernels.advance`."""
     terms, reward, d_min, result, overlaps = floats[:5], floats[5], floats[6], ints[0], ints[1]
     robot_hit, terminated, truncated = flags[0], flags[1], flags[2]
     vel[:, 0], vel[:, 1:] = robot_vel, human_vel
     if not motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min, clip_robot):
         return -1
+    mirror[:, : pos.shape[1]] = pos
     return outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
                    max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
                    change_due)

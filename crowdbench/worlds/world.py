@@ -337,10 +337,10 @@ class CrowdWorld:
         events = advance(rv.reshape(B, 2), hv, self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges,
                          self.dt, 20, self._disp, not unicycle, self.goal, self.heading, self.steps,
                          self.prev_goal_dist, unicycle, self._max_steps, self._rw, self._change_every, floats, ints,
-                         flags, self._reached, self._change_due)
+                         flags, self._reached, self._change_due, self.physics.mirror)
         if events < 0:
             raise self._non_finite(human_override)
-        self.physics.sync(self.pos)
+        self.physics.sync()  # the kernel wrote the positions into its rows
         if events & 1:
             self._renew_goals(self._reached)
         if events & 2:
