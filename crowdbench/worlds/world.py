@@ -100,9 +100,14 @@ class StepResult:
     def scalars(self, world: int = 0) -> dict:
         """World ``world``'s figures as Python scalars: ``outcome`` (name), ``reward_terms`` (dict), ``d_min``,
         ``human_overlaps``, ``robot_hit_obstacle``."""
-        f = self._f[:, world].tolist()
-        return {"outcome": OUTCOMES[self._i.item(0, world)], "reward_terms": dict(zip(REWARD_TERMS, f, strict=False)),
-                "d_min": f[6], "human_overlaps": self._i.item(1, world), "robot_hit_obstacle": self._b.item(0, world)}
+        if world == 0 and self._f.shape[1] == 1:  # one world: contiguous columns
+            f, (outcome, overlaps) = self._f.ravel().tolist(), self._i.ravel().tolist()
+        else:
+            f, (outcome, overlaps) = self._f[:, world].tolist(), self._i[:, world].tolist()
+        t = REWARD_TERMS  # a literal dict: half the cost of dict(zip(...)) on this per-step path
+        terms = {t[0]: f[0], t[1]: f[1], t[2]: f[2], t[3]: f[3], t[4]: f[4]}
+        return {"outcome": OUTCOMES[outcome], "reward_terms": terms, "d_min": f[6], "human_overlaps": overlaps,
+                "robot_hit_obstacle": self._b.item(0, world)}
 
 
 class CrowdWorld:
