@@ -15,6 +15,8 @@ it bit for bit (``tests/worlds/test_kernels.py``):
 
 Why compiled: a world step of a small crowd is a few hundred numpy calls on arrays of a handful of elements, so
 per-call overhead (≈ 1 µs each) dominated; each kernel here costs one dispatch (≈ 1–3 µs) plus its arithmetic.
+The dispatch grows with the number of array arguments (≈ 70 ns each), so :func:`advance` takes its outputs in
+blocks. ``error_model="numpy"`` (as the ORCA kernel): divisions here are guarded, and need no zero check.
 """
 
 from __future__ import annotations
@@ -29,7 +31,7 @@ from crowdbench.geometry import pair_overlaps
 INF = np.inf
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def _point_segment(px, py, ax, ay, bx, by):  # pragma: no cover - numba
     """``geometry.point_segment_distance`` for one point and one segment."""
     abx, aby = bx - ax, by - ay
@@ -39,7 +41,7 @@ def _point_segment(px, py, ax, ay, bx, by):  # pragma: no cover - numba
     return math.sqrt(dx * dx + dy * dy)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def _segment_segment(p0x, p0y, p1x, p1y, ax, ay, bx, by):  # pragma: no cover - numba
     """``geometry.segment_segment_distance`` for one pair of segments."""
     d = min(min(_point_segment(p0x, p0y, ax, ay, bx, by), _point_segment(p1x, p1y, ax, ay, bx, by)),
@@ -55,7 +57,7 @@ def _segment_segment(p0x, p0y, p1x, p1y, ax, ay, bx, by):  # pragma: no cover - 
     return d
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def _touches(sx, sy, ex, ey, r, edges):  # pragma: no cover - numba
     """Whether the segment (sx, sy)–(ex, ey) comes within ``r`` of any edge ``(S, 2, 2)``."""
     for s in range(edges.shape[0]):
@@ -64,7 +66,7 @@ def _touches(sx, sy, ex, ey, r, edges):  # pragma: no cover - numba
     return False
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, d_min,
            clip_robot):  # pragma: no cover - numba
     """The motion of one step, in place.
@@ -139,7 +141,7 @@ def motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, 
     return True
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
             max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
             change_due):  # pragma: no cover - numba
@@ -201,7 +203,7 @@ def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_mi
     return events
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def advance(robot_vel, human_vel, pos, vel, v_pref, radius, active, edges, dt, iters, disp, clip_robot, goal, heading,
             steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, floats, ints, flags, reached,
             change_due, mirror):  # pragma: no cover - numba
@@ -229,7 +231,7 @@ def advance(robot_vel, human_vel, pos, vel, v_pref, radius, active, edges, dt, i
                    change_due)
 
 
-@nb.njit(cache=True, inline="always")
+@nb.njit(cache=True, inline="always", error_model="numpy")
 def _insert(dist, idx, count, cap, d, j):  # pragma: no cover - numba
     """Insert candidate ``j`` at distance ``d`` into the sorted first ``count`` entries of ``dist``/``idx``, keeping
     at most ``cap`` (ties keep index order, as a stable sort would). Returns the new count."""
@@ -245,7 +247,7 @@ def _insert(dist, idx, count, cap, d, j):  # pragma: no cover - numba
     return count
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, by_id, robot, humans,
                       mask):  # pragma: no cover - numba
     """The robot's observation arrays, nearest pedestrian first, in place.
@@ -290,7 +292,7 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
                 humans[b, j, 2], humans[b, j, 3], humans[b, j, 4] = vel[b, h, 0], vel[b, h, 1], radius[b, h]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, sensing_range, robot_visible, me,
                       neighbors, mask):  # pragma: no cover - numba
     """Every pedestrian slot's own observation of world ``world``, in place.
@@ -333,7 +335,7 @@ def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, se
             f[2], f[3], f[4] = vel[j, 0], vel[j, 1], radius[j]
 
 
-@nb.njit(cache=True)
+@nb.njit(cache=True, error_model="numpy")
 def first_clear(starts, pos, radius, active, agent, gap):  # pragma: no cover - numba
     """Index of the first candidate start ``(m, 2)`` whose centre distance to every other active agent of the world
     (``pos`` ``(A, 2)``, ``radius`` ``(A,)``, ``active`` ``(A,)``) is at least both radii + ``gap`` [m], where
