@@ -33,7 +33,7 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from crowdbench.envs.common import build_world, render_frame, robot_action_space, robot_info
-from crowdbench.robots.observations import human_observation_space, human_observations, make_observation
+from crowdbench.robots.observations import agent_observations, human_observation_space, make_observation
 
 
 class CrowdParallelEnv(ParallelEnv):
@@ -142,10 +142,9 @@ class CrowdParallelEnv(ParallelEnv):
     def _observations(self) -> dict[str, dict[str, np.ndarray]]:
         """Every live agent's observation: views into one batched array per field (``agents[1:]`` are
         ``human_0 … human_{n-1}`` in order, so row ``i`` belongs to ``human_i``)."""
-        robot = self._obs_builder.build(self.world)
+        robot, h = agent_observations(self._obs_builder, self.world)
         obs = {"robot": {k: v[0] for k, v in robot.items()}}
         if len(self.agents) > 1:
-            h = human_observations(self.world, 0)
             for agent, me, nb, mask in zip(self.agents[1:], h["self"], h["neighbors"], h["mask"], strict=False):
                 obs[agent] = {"self": me, "neighbors": nb, "mask": mask}
         return obs

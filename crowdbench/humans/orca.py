@@ -80,7 +80,6 @@ class ORCABase(HumanModel):
         self._int[0] = p.neighbors(A)
         self._flags = np.ones((2, B, A), dtype=bool)  # active, controlled (not the robot: the world moves it)
         self._flags[1, :, 0] = False
-        self._out = self._vec[3]
         self._pad = p.radius_pad + p.safety_space  # added to every radius [m]
         self._seen, self._hidden = np.zeros((B, num_humans), dtype=bool), np.ones((B, num_humans), dtype=bool)
 
@@ -98,7 +97,8 @@ class ORCABase(HumanModel):
         orca_step(state.robot_position, state.robot_velocity, state.robot_radius, state.positions, state.velocities,
                   state.goals, state.radii, state.v_pref, state.active, ignore_robot, self._pad, state.time_step,
                   self._vec, self._flt, self._int, self._flags, *self._obst)
-        return self._out[:, 1:]  # a view, rewritten by the next step (the world copies it)
+        return self._vec[3, :, 1:]  # a view, rewritten by the next step (the world copies it); no stored view: a
+        # deep copy of the model (the "truth" predictor) must not keep one into the original's memory
 
 
 @register("orca")

@@ -23,7 +23,7 @@ from gymnasium import spaces
 
 from crowdbench.config import WorldConfig
 from crowdbench.registry import Registry
-from crowdbench.worlds._kernels import human_observation, robot_observation
+from crowdbench.worlds._kernels import human_observation, one_world_observations, robot_observation
 
 BOUND = 1.0e5
 """Finite bound of the Box spaces [m or m/s] (parked padding slots sit at 1e4 m)."""
@@ -82,7 +82,12 @@ class RelativeObservation(Observation):
                             "mask": spaces.Box(0.0, 1.0, (n,), np.float32)})
 
     def build(self, world) -> dict[str, np.ndarray]:
-        return _build(world, 2, self.config.sensing_range, self.config.max_humans_observed)
+        return _build(world, *self.kernel_spec())
+
+    def kernel_spec(self) -> tuple[int, float, int, bool]:
+        """``(features, max_range, slots, by_id)`` of the compiled builder (:func:`agent_observations` fuses it
+        with the pedestrians' observations)."""
+        return 2, self.config.sensing_range, self.config.max_humans_observed, False
 
 
 @OBSERVATIONS.register("relative_by_id")
@@ -93,8 +98,8 @@ class RelativeByIdObservation(RelativeObservation):
 
     name = "relative_by_id"
 
-    def build(self, world) -> dict[str, np.ndarray]:
-        return _build(world, 2, self.config.sensing_range, self.config.max_humans_observed, by_id=True)
+    def kernel_spec(self) -> tuple[int, float, int, bool]:
+        return 2, self.config.sensing_range, self.config.max_humans_observed, True
 
 
 @OBSERVATIONS.register("full_state")
@@ -109,7 +114,11 @@ class FullStateObservation(Observation):
                             "mask": spaces.Box(0.0, 1.0, (n,), np.float32)})
 
     def build(self, world) -> dict[str, np.ndarray]:
-        return _build(world, 5, np.inf, self.config.max_humans_observed)
+        return _build(world, *self.kernel_spec())
+
+    def kernel_spec(self) -> tuple[int, float, int, bool]:
+        """See :meth:`RelativeObservation.kernel_spec`."""
+        return 5, np.inf, self.config.max_humans_observed, False
 
 
 def human_observation_space(config: WorldConfig) -> spaces.Dict:
@@ -132,6 +141,27 @@ def human_observations(world, b: int) -> dict[str, np.ndarray]:
                       cfg.human_sensing_range, cfg.robot_visible, me, nb, mask)
     return {"self": me, "neighbors": nb, "mask": mask}
 
+
+def agent_observations(builder: Observation, world) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+    """The robot's observation (``builder``, arrays with a leading dimension of 1) and every pedestrian slot's
+    (:func:`human_observations`) of a one-world ``world``: one compiled call for the compiled builders
+    (``relative``, ``relative_by_id``, ``full_state``: their ``kernel_spec``), the builder then the pedestrians'
+    kernel for any other."""
+    if type(builder).build not in _COMPILED_BUILDS or world.num_worlds != 1:  # (a subclass may override build)
+        return builder.build(world), human_observations(world, 0)
+    features, max_range, n_max, by_id = builder.kernel_spec()
+    cfg = world.config
+    H, n = world.num_humans, cfg.max_humans_observed
+    robot, humans, mask = np.empty((1, 9), np.float32), np.empty((1, n_max, features), np.float32), \
+        np.empty((1, n_max), np.float32)
+    me, nb, hmask = np.empty((H, 9), np.float32), np.empty((H, n, 5), np.float32), np.empty((H, n), np.float32)
+    one_world_observations(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading,
+                           world.active, max_range, by_id, cfg.human_sensing_range, cfg.robot_visible, robot, humans,
+                           mask, me, nb, hmask)
+    return {"robot": robot, "humans": humans, "mask": mask}, {"self": me, "neighbors": nb, "mask": hmask}
+
+
+_COMPILED_BUILDS = (RelativeObservation.build, FullStateObservation.build)
 
 OBSERVATIONS.register("predicted", "crowdbench.predictors.observation:PredictedObservation")
 

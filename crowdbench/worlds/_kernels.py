@@ -10,7 +10,8 @@ it bit for bit (``tests/worlds/test_kernels.py``):
 * :func:`outcome` — which agents turn, goal distance, the paper's reward terms, episode outcome, pedestrian
   overlaps, goal arrivals (reference: ``reference.outcome``);
 * :func:`robot_observation` / :func:`human_observation` — nearest-first observation arrays in float32
-  (reference: ``reference.robot_observation`` / ``reference.human_observation``);
+  (reference: ``reference.robot_observation`` / ``reference.human_observation``); both at once for one world:
+  :func:`one_world_observations`;
 * :func:`first_clear` — the first re-spawn candidate clear of everyone (reference: ``reference.first_clear``).
 
 Why compiled: a world step of a small crowd is a few hundred numpy calls on arrays of a handful of elements, so
@@ -333,6 +334,16 @@ def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, se
             f = neighbors[i - 1, s]
             f[0], f[1] = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1]
             f[2], f[3], f[4] = vel[j, 0], vel[j, 1], radius[j]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def one_world_observations(pos, vel, goal, radius, v_pref, heading, active, max_range, by_id, sensing_range,
+                           robot_visible, robot, humans, mask, me, neighbors, hmask):  # pragma: no cover - numba
+    """:func:`robot_observation` then :func:`human_observation` of a batch of one world in one dispatch (the
+    PettingZoo adapter builds both every step); arguments as theirs."""
+    robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, by_id, robot, humans, mask)
+    human_observation(pos, vel, goal, radius, v_pref, heading, active, 0, sensing_range, robot_visible, me,
+                      neighbors, hmask)
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -252,3 +252,36 @@ def test_world_through_kernels_equals_world_through_reference(layout, config, mo
     assert len(fast) == len(slow)
     for a, b in zip(fast, slow, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("name", ["relative", "relative_by_id", "full_state", "predicted"])
+def test_one_world_observations_in_one_call_equal_builder_and_pedestrian_kernels(name):
+    from crowdbench.robots.observations import agent_observations
+
+    w = CrowdWorld(WorldConfig(num_humans=9, humans_range=(4, 9)), 1, "circle_crossing", "responsive_orca")
+    builder = make_observation(name, w.config)
+    rng = np.random.default_rng(1)
+    for t in range(60):
+        if t % 20 == 0:
+            w.reset(seeds=[t])
+        w.step(rng.uniform(-1.2, 1.2, (1, 2)))
+        robot, humans = agent_observations(builder, w)
+        for got, want in ((robot, builder.build(w)), (humans, human_observations(w, 0))):
+            assert got.keys() == want.keys()
+            for k in got:
+                np.testing.assert_array_equal(got[k], want[k])
+
+
+def test_a_builder_subclass_that_overrides_build_is_not_bypassed():
+    from crowdbench.robots.observations import RelativeObservation, agent_observations
+
+    class Shifted(RelativeObservation):
+        def build(self, world):
+            out = super().build(world)
+            out["robot"] += 1.0
+            return out
+
+    w = CrowdWorld(WorldConfig(num_humans=5), 1, "circle_crossing", "orca")
+    w.step(np.zeros((1, 2)))
+    robot, _ = agent_observations(Shifted(w.config), w)
+    np.testing.assert_array_equal(robot["robot"], RelativeObservation(w.config).build(w)["robot"] + 1.0)
