@@ -43,7 +43,6 @@ def demo(args: argparse.Namespace) -> int:
     kwargs = {"layout": args.layout, "num_humans": args.humans, "human_model": args.human_model,
               "human_model_kwargs": _model_kwargs(args.human_model, args.responsiveness), "render_mode": "rgb_array"}
     args.policy, args.policy_pos = name, None
-    args.checkpoint = getattr(args, "checkpoint", None)
     policy = _policy(args, make_config(num_humans=args.humans))  # the env's config (envs.common.build_world)
     # the instance's observation: a checkpoint may choose it (DS-RNN's slot order)
     env = CrowdParallelEnv(**kwargs, observation=policy.observation, observation_kwargs=policy.observation_kwargs)
@@ -359,6 +358,7 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("demo", help="run one rendered episode and write a GIF")
     _common(p)
+    p.add_argument("--checkpoint", default=None, help="checkpoint of a checkpoint-backed policy")
     p.add_argument("--gif", default="demo.gif", help="output GIF path")
     p.set_defaults(func=demo)
     p = sub.add_parser("render", help="one episode of any policy as an animated GIF (same as demo, policy first)")

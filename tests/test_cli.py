@@ -56,3 +56,12 @@ def test_social_force_robot_beats_walking_blind():
     sf = summarize(run_episodes(make_policy("social_force"), 40, seed=0, num_humans=10, human_model="linear"))
     lin = summarize(run_episodes(make_policy("linear"), 40, seed=0, num_humans=10, human_model="linear"))
     assert sf["collision_rate"] < lin["collision_rate"]
+
+
+def test_demo_runs_a_named_checkpoint_and_refuses_one_for_a_policy_without(tmp_path, capsys):
+    gif = tmp_path / "demo.gif"
+    argv = ["demo", "--policy", "h2int", "--checkpoint", "h2int-seed2", "--humans", "5", "--gif", str(gif)]
+    assert main(argv) == 0
+    assert "policy=h2int" in capsys.readouterr().out and gif.exists()
+    assert main(["demo", "--policy", "orca", "--checkpoint", "h2int", "--gif", str(gif)]) == 2
+    assert "--checkpoint: policy 'orca' takes no checkpoint" in capsys.readouterr().err
