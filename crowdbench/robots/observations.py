@@ -54,13 +54,22 @@ class Observation(ABC):
 OBSERVATIONS: Registry[Observation] = Registry("robot observation", "crowdbench.observations")
 
 
+def _robot_arrays(B: int, n_max: int, features: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Uninitialised outputs of the robot builders: robot ``(B, 9)``, humans ``(B, n_max, features)``, mask
+    ``(B, n_max)`` (float32; the kernels write every element)."""
+    return (np.empty((B, 9), np.float32), np.empty((B, n_max, features), np.float32),
+            np.empty((B, n_max), np.float32))
+
+
+def _human_arrays(H: int, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Uninitialised outputs of the pedestrians' builder: self ``(H, 9)``, neighbors ``(H, n, 5)``, mask ``(H, n)``."""
+    return np.empty((H, 9), np.float32), np.empty((H, n, 5), np.float32), np.empty((H, n), np.float32)
+
+
 def _build(world, features: int, max_range: float, n_max: int, by_id: bool = False) -> dict[str, np.ndarray]:
     """Robot vector, pedestrian features ``(B, n_max, features)`` (nearest first, or slot ``j`` = pedestrian ``j``
     with ``by_id``) and mask (one compiled kernel)."""
-    B = world.num_worlds
-    robot = np.empty((B, 9), np.float32)
-    humans = np.empty((B, n_max, features), np.float32)
-    mask = np.empty((B, n_max), np.float32)
+    robot, humans, mask = _robot_arrays(world.num_worlds, n_max, features)
     robot_observation(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading, world.active,
                       max_range, by_id, robot, humans, mask)
     return {"robot": robot, "humans": humans, "mask": mask}
@@ -135,8 +144,7 @@ def human_observation_space(config: WorldConfig) -> spaces.Dict:
 def human_observations(world, b: int) -> dict[str, np.ndarray]:
     """Observations of all pedestrian slots of world ``b`` (one compiled kernel): arrays ``(H, ...)``."""
     cfg = world.config
-    H, n = world.num_humans, cfg.max_humans_observed
-    me, nb, mask = np.empty((H, 9), np.float32), np.empty((H, n, 5), np.float32), np.empty((H, n), np.float32)
+    me, nb, mask = _human_arrays(world.num_humans, cfg.max_humans_observed)
     human_observation(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading, world.active, b,
                       cfg.human_sensing_range, cfg.robot_visible, me, nb, mask)
     return {"self": me, "neighbors": nb, "mask": mask}
@@ -151,10 +159,8 @@ def agent_observations(builder: Observation, world) -> tuple[dict[str, np.ndarra
         return builder.build(world), human_observations(world, 0)
     features, max_range, n_max, by_id = builder.kernel_spec()
     cfg = world.config
-    H, n = world.num_humans, cfg.max_humans_observed
-    robot, humans, mask = np.empty((1, 9), np.float32), np.empty((1, n_max, features), np.float32), \
-        np.empty((1, n_max), np.float32)
-    me, nb, hmask = np.empty((H, 9), np.float32), np.empty((H, n, 5), np.float32), np.empty((H, n), np.float32)
+    robot, humans, mask = _robot_arrays(1, n_max, features)
+    me, nb, hmask = _human_arrays(world.num_humans, cfg.max_humans_observed)
     one_world_observations(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading,
                            world.active, max_range, by_id, cfg.human_sensing_range, cfg.robot_visible, robot, humans,
                            mask, me, nb, hmask)
