@@ -126,11 +126,15 @@ def train_cmd(args: argparse.Namespace) -> int:
     method = PPO_METHODS.get(args.algo)()
     speed = {name: getattr(args, name) for name in RESUMABLE if getattr(args, name) is not None}
     if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
+        if args.variant is not None or args.model:
+            raise ValueError("--variant/--model: a resumed run keeps its architecture; drop them with --resume")
         path = checkpoints.run_checkpoint(args.resume)
         cfg = resume_config(path, **speed)
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
         model = method.variant_model(args.variant) if args.variant is not None else None
+        if args.model:
+            model = {**(model or {}), **method.model_overrides(args.model)}
         overrides = {"model": model, "seed": args.seed, **speed}
         if args.no_anneal:
             overrides["anneal"] = False
@@ -153,7 +157,7 @@ def train_value_cmd(args: argparse.Namespace) -> int:
     """CADRL / SARL: imitation of the ORCA robot, then TD learning (:mod:`crowdbench.training.value`)."""
     from crowdbench.training.value import ValueTrainConfig, resume_config, train_value
 
-    ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "iterations", "until_success", "envs",
+    ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "model", "iterations", "until_success", "envs",
                                                      "env_processes", "epochs", "mini_batches")
                 if getattr(args, k) is not None] + (["--no-anneal"] if args.no_anneal else [])
     if ppo_only:
@@ -384,6 +388,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("algo", metavar="METHOD", help="h2int (or another registered PPO method), cadrl or sarl")
     p.add_argument("--variant", default=None, help="architecture: h2int: h2int (default), flat, meanpool or standard; "
                         "dsrnn, aig_gst: original (default) or small")
+    p.add_argument("--model", action="append", default=None, metavar="FIELD=VALUE",
+                   help="architecture field over the variant's (repeatable), e.g. --model d_model=64 --model "
+                        "gru_hidden=128; the fields are the method's config (H2INTConfig, ...)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
     p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")

@@ -13,6 +13,7 @@ not use PPO; their training lives beside this one (:mod:`crowdbench.training.val
 
 from __future__ import annotations
 
+import dataclasses
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
@@ -49,6 +50,35 @@ class PPOMethod(ABC):
         if name not in self.variants:
             raise ValueError(f"--variant {name!r} for {self.name}; valid choices: {', '.join(self.variants)}")
         return dict(self.variants[name])
+
+    def model_overrides(self, specs: list[str]) -> dict[str, Any]:
+        """``FIELD=VALUE`` strings (``crowdbench train --model``) → :attr:`model_config` fields, each value parsed
+        by its field's default type (``int``, ``float``, ``bool``, ``str``, or a comma-separated tuple such as
+        ``head_dims=128,128``)."""
+        fields = {f.name: f for f in dataclasses.fields(self.model_config)}
+        out: dict[str, Any] = {}
+        for spec in specs:
+            name, sep, text = spec.partition("=")
+            name = name.strip()
+            if not sep or name not in fields:
+                raise ValueError(f"--model {spec!r} for {self.name}: expected FIELD=VALUE with FIELD one of "
+                                 f"{', '.join(fields)}")
+            default = fields[name].default
+            kind = type(default) if default is not dataclasses.MISSING else str
+            try:
+                if kind is tuple:
+                    inner = type(default[0]) if default else int
+                    out[name] = tuple(inner(v) for v in text.split(",") if v.strip())
+                elif kind is bool:
+                    if text.lower() not in ("true", "false", "1", "0"):
+                        raise ValueError(text)
+                    out[name] = text.lower() in ("true", "1")
+                else:
+                    out[name] = kind(text)
+            except ValueError:
+                raise ValueError(f"--model {spec!r} for {self.name}: {name} takes a {kind.__name__} value "
+                                 f"(default {default!r})") from None
+        return out
 
     def observation_name(self, model: Any) -> str:
         """The observation builder that architecture ``model`` reads (default: :attr:`observation`)."""

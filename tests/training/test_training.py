@@ -223,3 +223,25 @@ def test_train_config_is_frozen_strict_and_round_trips():
     for f in dataclasses.fields(TrainConfig):  # every field is followed by its docstring
         i = next(k for k, line in enumerate(lines) if line.startswith(f"    {f.name}: "))
         assert lines[i + 1].strip().startswith('"""'), f.name
+
+
+def test_model_overrides_parse_by_field_type_and_reject_bad_input(capsys):
+    """`crowdbench train --model FIELD=VALUE`: typed values over the variant's; unknown fields, unparsable values,
+    value methods and resumed runs get one clear error."""
+    from crowdbench.policies.h2int.training import H2INTMethod
+
+    method = H2INTMethod()
+    got = method.model_overrides(["d_model=64", "head_dims=128,64", "action_std=0.2", "variant=flat"])
+    assert got == {"d_model": 64, "head_dims": (128, 64), "action_std": 0.2, "variant": "flat"}
+    cfg = TrainConfig.for_method("h2int", model=got)
+    assert (cfg.model.d_model, cfg.model.head_dims, cfg.model.gru_hidden) == (64, (128, 64), 64)
+    with pytest.raises(ValueError, match="FIELD one of variant, d_model"):
+        method.model_overrides(["width=3"])
+    with pytest.raises(ValueError, match="d_model takes a int value"):
+        method.model_overrides(["d_model=wide"])
+    assert main(["train", "h2int", "--model", "d_model=33"]) == 2  # 33 is no multiple of 4 heads
+    assert "heads=4; valid choices: a divisor of d_model=33" in capsys.readouterr().err
+    assert main(["train", "cadrl", "--model", "d_model=64"]) == 2
+    assert "--model: options of the PPO methods" in capsys.readouterr().err
+    assert main(["train", "h2int", "--resume", "runs/x", "--model", "d_model=64"]) == 2
+    assert "keeps its architecture" in capsys.readouterr().err
