@@ -56,7 +56,13 @@ def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: 
     still = np.zeros((B, 2))
     out: list[Episode] = []
     while running.any():
-        action = check_actions(policy, policy.act(obs_builder.build(world)), B)
+        obs = obs_builder.build(world)
+        if policy.stateless and not running.all():  # the batch's tail: finished worlds need no decision
+            rows = np.flatnonzero(running)
+            action = np.zeros((B, 2))
+            action[rows] = check_actions(policy, policy.act({k: v[rows] for k, v in obs.items()}), len(rows))
+        else:
+            action = check_actions(policy, policy.act(obs), B)
         prev_pos, prev_goal, prev_v = world.pos.copy(), world.goal.copy(), world.vel[:, 0].copy()
         twin_prev = (twin.pos.copy(), twin.goal.copy()) if twin is not None else None
         res = world.step(action)

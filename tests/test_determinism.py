@@ -45,3 +45,28 @@ def test_h2int_is_batch_dependent_only_by_rounding():
     assert same >= 14  # measured: 16 of 16 (seed 11, N = 12); a rounding-level divergence may flip a close call
     close = [abs(a.path_length - b.path_length) < 1.0 for a, b in zip(one, many, strict=True) if a.outcome == b.outcome]
     assert sum(close) >= len(close) - 2
+
+
+def test_stateless_policies_are_asked_only_for_running_worlds_with_identical_episodes():
+    """A stateless policy (CADRL, SARL) gets only the worlds still running once the batch's last episodes are under
+    way; the episodes are the same as when every world is asked."""
+    from crowdbench.policies.classic import ORCAPolicy
+
+    class Asked(ORCAPolicy):
+        def __init__(self, *a, **kw):
+            super().__init__(*a, **kw)
+            self.sizes: list[int] = []
+
+        def act(self, obs):
+            self.sizes.append(len(obs["robot"]))
+            return super().act(obs)
+
+    class StatelessAsked(Asked):
+        stateless = True
+
+    every, tail = Asked(), StatelessAsked()
+    kw = dict(episodes=12, seed=3, num_worlds=6, num_humans=6)
+    a, b = run_episodes(every, **kw), run_episodes(tail, **kw)
+    assert as_rows(a) == as_rows(b)
+    assert set(every.sizes) == {6} and len(every.sizes) == len(tail.sizes)
+    assert min(tail.sizes) == 1 and sum(tail.sizes) < sum(every.sizes)

@@ -27,10 +27,14 @@ class RobotPolicy(ABC):
     Class attributes:
         observation: Name of the robot observation builder the policy consumes (``relative`` or ``full_state``).
         kinematics: Robot kinematics the actions are meant for.
+        stateless: A world's action depends on that world's current observation only (no memory, no batch-wide
+            state), so :func:`~crowdbench.evaluation.run_episodes` asks only for the worlds still running once a
+            batch's last episodes are under way (CADRL and SARL, whose look-ahead dominates their evaluation).
     """
 
     observation: ClassVar[str] = "relative"
     kinematics: ClassVar[tuple[str, ...]] = ("holonomic",)
+    stateless: ClassVar[bool] = False
 
     def __init__(self, config: WorldConfig | None = None) -> None:
         self.config = config or WorldConfig()

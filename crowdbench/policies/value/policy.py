@@ -47,6 +47,7 @@ class ValuePolicy(RobotPolicy):
     """
 
     observation = "full_state"
+    stateless = True
     method: ClassVar[str] = ""
 
     def __init__(self, config: WorldConfig | None = None, checkpoint: str | None = None,
