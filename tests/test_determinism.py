@@ -67,6 +67,6 @@ def test_stateless_policies_are_asked_only_for_running_worlds_with_identical_epi
     every, tail = Asked(), StatelessAsked()
     kw = dict(episodes=12, seed=3, num_worlds=6, num_humans=6)
     a, b = run_episodes(every, **kw), run_episodes(tail, **kw)
-    assert as_rows(a) == as_rows(b)
+    np.testing.assert_equal(as_rows(a), as_rows(b))  # (NaN metrics compare equal here)
     assert set(every.sizes) == {6} and len(every.sizes) == len(tail.sizes)
     assert min(tail.sizes) == 1 and sum(tail.sizes) < sum(every.sizes)
