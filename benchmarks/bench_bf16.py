@@ -4,30 +4,28 @@ mixed precision), so it becomes a switch only with a trained result behind it.
 
     python benchmarks/bench_bf16.py [--rounds 2]
 
-Prints milliseconds per call, float32 against bfloat16 in alternation, for: SARL's look-ahead forward (81 actions × 20
-pedestrians × 20 worlds), one SARL SGD batch (100 states, 10–30 pedestrian slots) and AIG-GST's original-width encoder
-forward + backward (2,048 samples, 0–15 pedestrians in view). One thread; pause other work on the machine.
+Prints the median milliseconds per call, float32 against bfloat16 in alternation, for: SARL's look-ahead forward
+(81 actions × 20 pedestrians × 20 worlds), one SARL SGD batch (100 states, 10–30 pedestrian slots) and AIG-GST's
+original-width encoder forward + backward (2,048 samples, 0–15 pedestrians in view). One thread; pause other work on
+the machine.
 """
 
 from __future__ import annotations
 
 import argparse
-import time
 from collections.abc import Callable
 
 import torch
+from common import machine, time_it
 
 from crowdbench.policies.aig.model import AIGConfig, build_actor
 from crowdbench.policies.value.model import build_net
 
 
 def timed(fn: Callable[[bool], None], bf16: bool, repeats: int) -> float:
-    """Milliseconds per call of ``fn(bf16)`` after one warm-up call."""
+    """Median milliseconds per call of ``fn(bf16)`` over ``repeats`` calls, after one warm-up call."""
     fn(bf16)
-    t = time.perf_counter()
-    for _ in range(repeats):
-        fn(bf16)
-    return (time.perf_counter() - t) / repeats * 1e3
+    return time_it(lambda: fn(bf16), repeats=repeats)[0] * 1e3
 
 
 def autocast(bf16: bool) -> torch.autocast:
@@ -69,8 +67,9 @@ def main() -> None:
             z = aig.encode_samples(obs)
         z.float().square().mean().backward()
 
+    print(machine())
     cases = (("SARL look-ahead forward, 32,400 rows", lookahead, 10), ("SARL SGD batch of 100", sgd, 100),
-             ("AIG-GST encoder fwd+bwd, 2,048 samples", encoder, 2))
+             ("AIG-GST encoder fwd+bwd, 2,048 samples", encoder, 3))
     for name, fn, repeats in cases:
         for r in range(args.rounds):
             fp32, bf16 = timed(fn, False, repeats), timed(fn, True, repeats)
