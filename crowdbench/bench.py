@@ -40,11 +40,18 @@ TARGETS = {"pettingzoo_steps_per_s N=5 (resets excluded)": 32_000,
            "train_steps_per_s": 5_000, "h2int_inference_ms": 1.0}
 
 
-def machine() -> dict[str, Any]:
-    """CPU model, cores and library versions."""
+def cpu_model() -> str:
+    """The CPU's model name (``/proc/cpuinfo``; the platform's processor or architecture where there is none), e.g.
+    ``"AMD EPYC 9V74 80-Core Processor"``: results that depend on the instruction set are traced by it."""
     cpu = platform.processor() or platform.machine()
     with contextlib.suppress(OSError, StopIteration), open("/proc/cpuinfo") as f:
         cpu = next(line.split(":", 1)[1].strip() for line in f if line.startswith("model name"))
+    return cpu
+
+
+def machine() -> dict[str, Any]:
+    """CPU model, cores and library versions."""
+    cpu = cpu_model()
     import numba
     import pymunk
     import torch

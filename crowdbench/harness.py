@@ -123,7 +123,8 @@ def load_suite(name_or_path: str, **overrides: Any) -> Suite:
 
 # ---------------------------------------------------------------------------------------------------- provenance
 def provenance() -> dict[str, Any]:
-    """Crowdbench version and commit, Python and package versions of this run."""
+    """Crowdbench version and commit, Python and package versions and CPU model of this run (the machine that wrote
+    the file; each cell records the CPU it ran on, see :func:`run_cell`)."""
     import platform
     import subprocess
     from importlib import metadata
@@ -144,7 +145,10 @@ def provenance() -> dict[str, Any]:
             versions[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
             versions[name] = None
-    return {"crowdbench": __version__, "commit": commit, "python": platform.python_version(), "packages": versions}
+    from crowdbench.bench import cpu_model
+
+    return {"crowdbench": __version__, "commit": commit, "python": platform.python_version(), "cpu": cpu_model(),
+            "packages": versions}
 
 
 def fingerprint(entry: Entry, suite: Suite) -> dict[str, Any]:
@@ -162,7 +166,10 @@ def cell_key(cell: Cell) -> str:
 
 
 def run_cell(entry: Entry, cell: Cell, suite: Suite) -> dict[str, Any]:
-    """Evaluate one cell, isolating faults: ``{"result": row}`` or ``{"error": "Type: message"}``."""
+    """Evaluate one cell, isolating faults: ``{"result": row, "cpu": model}`` or ``{"error": "Type: message", ...}``.
+    ``cpu`` names the machine's CPU: a learned policy's closed loop can differ in the last bits between instruction
+    sets (``leaderboards/README.md``), and with Ray the cells of one method may run on different machines."""
+    from crowdbench.bench import cpu_model
     from crowdbench.leaderboard import evaluate_cells
 
     try:
@@ -176,10 +183,10 @@ def run_cell(entry: Entry, cell: Cell, suite: Suite) -> dict[str, Any]:
         row = evaluate_cells(entry.policy, [cell], suite.episodes, suite.seed, num_worlds=suite.worlds,
                              policy_kwargs=entry.policy_kwargs(), progress=False, label=entry.label,
                              counterfactual=suite.counterfactual)[0]
-        return {"result": row}
+        return {"result": row, "cpu": cpu_model()}
     except Exception as e:  # noqa: BLE001 - a failing cell is recorded, the run goes on
         msg = str(e).splitlines()[0] if str(e) else ""
-        return {"error": f"{type(e).__name__}: {msg}", "wall_s": round(time.time() - t, 1)}
+        return {"error": f"{type(e).__name__}: {msg}", "wall_s": round(time.time() - t, 1), "cpu": cpu_model()}
 
 
 class CellStore:
@@ -296,9 +303,11 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
                         {"policy": e.label, "table": c.table, "row": c.row, "layout": c.layout, "humans": c.humans,
                          "responsiveness": c.rho, "seed": suite.seed, "error": o["error"]})
         board[e.label] = rows
+        cpus = sorted({outcomes[(e.label, cell_key(c))].get("cpu") or "unrecorded" for c in grid})
         meta = {"fingerprint": fps[e.label], "label": e.label, "group": e.group, "suite": suite.to_dict(),
                 "suite_digest": suite.digest(), "episodes": suite.episodes, "seed": suite.seed,
-                "wall_s": round(sum(r.get("wall_s", 0.0) for r in rows), 1), "provenance": info}
+                "wall_s": round(sum(r.get("wall_s", 0.0) for r in rows), 1),
+                "provenance": {**info, "cell_cpus": cpus}}
         write_text(os.path.join(out, f"{e.slug}.json"),
                    json.dumps({"meta": meta, "results": rows}, indent=2) + "\n")
         write_text(os.path.join(out, f"{e.slug}.md"), markdown(rows))

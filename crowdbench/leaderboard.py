@@ -438,11 +438,40 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                                                                            if math.isfinite(r["nav_time"]) else "—"))
                 out.append(f"| {lb} | " + " | ".join(cellsx) + " |")
             if group.startswith("seeds"):
-                stats = []
-                for s_ in settings:
-                    vals = [100 * r["success_rate"] for lb in labels for r in board[lb]
-                            if r["table"] == table and r["row"] == s_ and "error" not in r]
-                    stats.append(f"{sum(vals) / len(vals):.1f} [{max(vals) - min(vals):.1f}]" if vals else "—")
+                stats = [_mean_spread(board, labels, table, s_) for s_ in settings]
                 out.append(f"| mean [spread], {len(labels)} seeds | " + " | ".join(stats) + " |")
             out.append("")
+        if group == "main":
+            families = {lb: [lb, *(x for x in board if groups.get(x) in
+                                   (f"seeds:{lb}", *(("seeds",) if lb == reference else ())))] for lb in labels}
+            out += _over_seeds(board, families)
     return "\n".join(out)
+
+
+def _mean_spread(board: dict[str, list[dict[str, Any]]], labels: list[str], table: str, row: str) -> str:
+    """``"mean [max − min]"`` of the success rates [%] of ``labels`` in one setting (one value: just it)."""
+    vals = [100 * r["success_rate"] for lb in labels for r in board[lb]
+            if r["table"] == table and r["row"] == row and "error" not in r]
+    if not vals:
+        return "—"
+    return f"{vals[0]:.1f}" if len(vals) == 1 else f"{sum(vals) / len(vals):.1f} [{max(vals) - min(vals):.1f}]"
+
+
+def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list[str]]) -> list[str]:
+    """The main methods' headline settings (Tables I, II and III pooled) as mean success [spread] over each method's
+    training seeds (``families``: main label → its seed labels, itself first); nothing when no method has several."""
+    if all(len(f) < 2 for f in families.values()):
+        return []
+    settings = sorted(dict.fromkeys((r["table"], r["row"]) for lb in families for r in board[lb]
+                                    if r["table"] != "III" or r["row"].startswith("pooled")),
+                      key=lambda s: ("I", "II", "III").index(s[0]))  # stable: each table's settings in board order
+    out = ["### Every method over its training seeds", "",
+           "Mean success [%] over every shipped training seed of a method and, in brackets, its spread (max − min); "
+           "a method with one row (one training seed, or a planner that is not trained) shows that row's value. "
+           "The tables above show each learned method's default checkpoint; its seeds have their own tables below.",
+           "", "| method | seeds | " + " | ".join(f"{'Table ' + t} {row}" for t, row in settings) + " |",
+           "|---|---|" + "---|" * len(settings)]
+    for lb, fam in families.items():
+        cells_ = [_mean_spread(board, fam, t, row) for t, row in settings]
+        out.append(f"| {lb} | {len(fam) if len(fam) > 1 else '—'} | " + " | ".join(cells_) + " |")
+    return [*out, ""]

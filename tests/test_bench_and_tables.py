@@ -97,6 +97,28 @@ def test_seed_rows_report_mean_and_spread():
     md = leaderboard.leaderboard_markdown({"h2int": rows(0.9), "h2int-seed1": rows(0.8), "h2int-seed2": rows(0.95)},
                                           {"h2int": "main", "h2int-seed1": "seeds", "h2int-seed2": "seeds"})
     assert "## h2int across training seeds" in md and "| mean [spread], 3 seeds | 88.3 [15.0] |" in md
+    assert "### Every method over its training seeds" not in leaderboard.leaderboard_markdown({"h2int": rows(0.9)})
+
+
+def test_the_main_section_gives_every_method_over_its_seeds():
+    def rows(table_i, pooled):
+        return [{"policy": "x", "table": "I", "row": "High", "success_rate": table_i, "collision_rate": 0.0,
+                 "timeout_rate": 1 - table_i, "nav_time": 10.0},
+                {"policy": "x", "table": "III", "row": "pooled High", "success_rate": pooled, "collision_rate": 0.0,
+                 "timeout_rate": 1 - pooled, "nav_time": 10.0},
+                {"policy": "x", "table": "III", "row": "split_flow High", "success_rate": 0.0, "collision_rate": 0.0,
+                 "timeout_rate": 1.0, "nav_time": 10.0}]
+
+    board = {"orca": rows(0.9, 0.7), "cadrl": rows(0.7, 0.3), "cadrl-seed1": rows(0.9, 0.4),
+             "cadrl-seed2": rows(0.8, 0.5), "h2int": rows(0.95, 0.9), "h2int-seed1": rows(0.85, 0.8)}
+    groups = {"orca": "main", "cadrl": "main", "h2int": "main", "cadrl-seed1": "seeds:cadrl",
+              "cadrl-seed2": "seeds:cadrl", "h2int-seed1": "seeds"}
+    md = leaderboard.leaderboard_markdown(board, groups)
+    section = md.split("### Every method over its training seeds")[1].split("##")[0]
+    assert "| method | seeds | Table I High | Table III pooled High |" in section  # per-layout cells left out
+    assert "| orca | — | 90.0 | 70.0 |" in section  # one row: its own value
+    assert "| cadrl | 3 | 80.0 [20.0] | 40.0 [20.0] |" in section
+    assert "| h2int | 2 | 90.0 [10.0] | 85.0 [10.0] |" in section  # plain "seeds" group = the reference's
 
 
 def test_ablations_get_their_training_seeds_and_a_figure_with_seed_spread(tmp_path, monkeypatch):

@@ -90,6 +90,12 @@ def test_cells_are_stored_reused_and_faults_stay_in_their_cell(tmp_path, users_p
     assert len(list((tmp_path / "cells").rglob("*.json"))) == 9
     meta = json.loads((tmp_path / "orca.json").read_text())["meta"]
     assert meta["provenance"]["packages"]["numpy"] and meta["suite_digest"] == suite().digest()
+    from crowdbench.bench import cpu_model
+
+    cpu = cpu_model()
+    assert cpu and meta["provenance"]["cpu"] == cpu and meta["provenance"]["cell_cpus"] == [cpu]
+    cell_file = tmp_path / "cells" / "orca" / "II-n-10.json"
+    assert json.loads(cell_file.read_text())["cpu"] == cpu  # each cell names the CPU it ran on
 
     calls = []
     real = harness.run_cell
@@ -97,6 +103,12 @@ def test_cells_are_stored_reused_and_faults_stay_in_their_cell(tmp_path, users_p
     again = harness.run(suite(), entries, str(tmp_path))
     assert sorted(calls) == ["N=20", "N=30"]  # only the failed cells are retried
     assert json.dumps(again["orca"]) == json.dumps(board["orca"])
+    saved = json.loads(cell_file.read_text())
+    saved.pop("cpu")  # a cell stored before CPUs were recorded is reused and marked as such
+    cell_file.write_text(json.dumps(saved))
+    harness.run(suite(), entries[:1], str(tmp_path))
+    meta = json.loads((tmp_path / "orca.json").read_text())["meta"]
+    assert meta["provenance"]["cell_cpus"] == sorted([cpu, "unrecorded"])
     calls.clear()
     harness.run(suite(episodes=5), entries[:1], str(tmp_path))
     assert len(calls) == 3  # another budget is another fingerprint
