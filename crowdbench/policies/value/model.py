@@ -25,6 +25,16 @@ STATE_DIM = 13
 SELF_DIM = 6
 
 
+def run_mlp(seq: nn.Sequential, x: torch.Tensor) -> torch.Tensor:
+    """``seq(x)``; without autograd (look-ahead, evaluation) each ReLU runs in place on its layer's fresh output —
+    the same values without a new buffer per layer."""
+    if torch.is_grad_enabled():
+        return seq(x)
+    for layer in seq:
+        x = x.relu_() if isinstance(layer, nn.ReLU) else layer(x)
+    return x
+
+
 def mlp(dims: tuple[int, ...], last_relu: bool = False) -> nn.Sequential:
     """Linear layers ``dims[0] → … → dims[-1]`` with ReLU between them (and after the last if ``last_relu``), as
     CrowdNav's ``mlp``."""
@@ -69,9 +79,9 @@ class CADRLNet(nn.Module):
     def forward(self, state: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         """Values ``(S,)`` of joint states ``(S, K, 13)`` with valid slots ``mask`` ``(S, K)``."""
         if bool(mask.all()):  # one robot's look-ahead: every slot holds a pedestrian
-            return self.value(state).squeeze(-1).amin(dim=1)
+            return run_mlp(self.value, state).squeeze(-1).amin(dim=1)
         pair = state.new_full(mask.shape, torch.inf)
-        pair[mask] = self.value(state[mask]).squeeze(-1)
+        pair[mask] = run_mlp(self.value, state[mask]).squeeze(-1)
         return pair.amin(dim=1)
 
     def reference(self, state: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
@@ -95,7 +105,7 @@ class SARLNet(nn.Module):
         """Masked softmax of the scores ``(S, K)``, attended feature, value MLP → ``(S,)``."""
         weights = torch.softmax(score.masked_fill(~mask, -torch.inf), dim=1)  # (S, K)
         pooled = (weights.unsqueeze(-1) * feat).sum(dim=1)
-        return self.mlp3(torch.cat([state[:, 0, :SELF_DIM], pooled], dim=-1)).squeeze(-1)
+        return run_mlp(self.mlp3, torch.cat([state[:, 0, :SELF_DIM], pooled], dim=-1)).squeeze(-1)
 
     def forward(self, state: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         """Values ``(S,)`` of joint states ``(S, K, 13)`` with valid slots ``mask`` ``(S, K)``."""
@@ -113,16 +123,19 @@ class SARLNet(nn.Module):
             return out
 
         rows = state.reshape(S * K, -1) if dense else state[mask]  # (R, 13): only the pedestrians that exist
-        h = self.mlp1(rows)
+        h = run_mlp(self.mlp1, rows)
         mean = spread(h).sum(dim=1) / mask.sum(dim=1, keepdim=True)
         # the score MLP's first layer on [h ‖ mean] = W_h·h + (W_g·mean + b): the mean's half once per state
         first = self.attention[0]
         w_h, w_g = first.weight[:, :d], first.weight[:, d:]
         per_state = nn.functional.linear(mean, w_g, first.bias)  # (S, A1)
-        seg = torch.arange(S).repeat_interleave(K) if dense else torch.arange(S).unsqueeze(1).expand(S, K)[mask]
-        z = nn.functional.linear(h, w_h) + per_state[seg]
-        score = spread(self.attention[1:](z).squeeze(-1))
-        return self._pool(state, score, spread(self.mlp2(h)), mask)
+        z = nn.functional.linear(h, w_h)
+        if dense:  # broadcast over each state's K rows, in place (the same sums as the gather below)
+            z.view(S, K, -1).add_(per_state.unsqueeze(1))
+        else:
+            z = z + per_state[torch.arange(S).unsqueeze(1).expand(S, K)[mask]]
+        score = spread(run_mlp(self.attention[1:], z).squeeze(-1))
+        return self._pool(state, score, spread(run_mlp(self.mlp2, h)), mask)
 
     def reference(self, state: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         emb = self.mlp1(state) * mask.unsqueeze(-1)
