@@ -442,8 +442,8 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                 out.append(f"| mean [spread], {len(labels)} seeds | " + " | ".join(stats) + " |")
             out.append("")
         if group == "main":
-            families = {lb: [lb, *(x for x in board if groups.get(x) in
-                                   (f"seeds:{lb}", *(("seeds",) if lb == reference else ())))] for lb in labels}
+            families = {lb: [lb, *(x for x in board if groups.get(x, "main").startswith("seeds")
+                                   and family(groups[x]) == lb)] for lb in labels}
             out += _over_seeds(board, families)
     return "\n".join(out)
 
@@ -469,7 +469,7 @@ def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list
            "Mean success [%] over every shipped training seed of a method and, in brackets, its spread (max − min); "
            "a method with one row (one training seed, or a planner that is not trained) shows that row's value. "
            "The tables above show each learned method's default checkpoint; its seeds have their own tables below.",
-           "", "| method | seeds | " + " | ".join(f"{'Table ' + t} {row}" for t, row in settings) + " |",
+           "", "| method | seeds | " + " | ".join(f"Table {t} {row}" for t, row in settings) + " |",
            "|---|---|" + "---|" * len(settings)]
     for lb, fam in families.items():
         cells_ = [_mean_spread(board, fam, t, row) for t, row in settings]
