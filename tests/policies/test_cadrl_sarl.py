@@ -21,6 +21,7 @@ from crowdbench.policies.value.lookahead import (
     current_state,
     free_space_value,
     lookahead,
+    lookahead_reference,
 )
 from crowdbench.policies.value.model import build_net
 from crowdbench.policies.value.policy import SARLPolicy
@@ -93,6 +94,44 @@ def test_lookahead_reward_is_swept_and_follows_crowdnav():
     assert lookahead(goal_scene, acts, 0.25, 0.3)[1][0].tolist() == [1.0, 1.0, 0.0, 0.0]  # stay, ahead: within 0.3
     # the next state: robot moved by a·dt, pedestrian by its velocity (constant-velocity propagation)
     np.testing.assert_allclose(nxt[0, 2, 0, 6:8].numpy(), [0.9 - 0.25 + 0.25, 0.0], atol=1e-6)
+
+
+def random_crowd_obs(rng: np.random.Generator, near_goal: bool) -> dict[str, np.ndarray]:
+    """A batch of full_state observations: 1–24 worlds, 1–30 slots (some masked), pedestrians at rest or walking,
+    some at the robot's position or touching it; robots on, near or far from their goals."""
+    B, N = int(rng.integers(1, 25)), int(rng.integers(1, 31))
+    robot = np.zeros((B, 9))
+    robot[:, 0:2] = rng.uniform(-7, 7, (B, 2))
+    robot[:, 2] = rng.uniform(0.2, 0.5, B)
+    robot[:, 3:5] = robot[:, 0:2] + rng.normal(0, 0.2, (B, 2)) if near_goal else rng.uniform(-7, 7, (B, 2))
+    robot[:, 5] = rng.uniform(0.5, 1.5, B)
+    robot[:, 7:9] = rng.uniform(-1, 1, (B, 2))
+    humans = np.zeros((B, N, 5))
+    humans[..., 0:2] = rng.normal(0, 3, (B, N, 2)) * rng.uniform(0.0, 1.5, (B, N, 1))
+    humans[..., 2:4] = rng.uniform(-1.5, 1.5, (B, N, 2)) * (rng.random((B, N, 1)) < 0.8)
+    humans[..., 4] = rng.uniform(0.3, 0.5, (B, N))
+    order = np.argsort(np.linalg.norm(humans[..., :2], axis=-1), axis=1)
+    humans = np.take_along_axis(humans, order[..., None], 1)
+    mask = np.sort((rng.random((B, N)) < 0.9).astype(np.float32), axis=1)[:, ::-1].copy()
+    return {"robot": robot.astype(np.float32), "humans": humans.astype(np.float32), "mask": mask}
+
+
+def test_compiled_lookahead_equals_the_torch_reference_bit_for_bit():
+    # the decisions (argmax over Q) and so every leaderboard cell depend on the last bit of the look-ahead
+    rng = np.random.default_rng(0)
+    acts = torch.as_tensor(action_set(), dtype=torch.float32)
+    seen: set[str] = set()
+    for trial in range(60):
+        scene = Scene.from_obs(random_crowd_obs(rng, near_goal=trial % 5 == 0), [5.0, 2.0, 1e9][trial % 3])
+        dt, tol = [0.25, 0.1, 0.4][trial % 3], [0.3, 0.2][trial % 2]
+        with torch.inference_mode():
+            nxt, r = lookahead(scene, acts, dt, tol)
+            nxt_ref, r_ref = lookahead_reference(scene, acts, dt, tol)
+        assert nxt.dtype == nxt_ref.dtype == torch.float32 and nxt.shape == nxt_ref.shape
+        assert torch.equal(nxt, nxt_ref) and torch.equal(r, r_ref), f"trial {trial}"
+        seen |= {"collision" if x == CROWDNAV_REWARD.collision else "success" if x == CROWDNAV_REWARD.success
+                 else "discomfort" if x < 0 else "free" for x in r.flatten().tolist()}
+    assert seen == {"collision", "success", "discomfort", "free"}  # every branch of the reward was compared
 
 
 @pytest.mark.parametrize("method", ["cadrl", "sarl"])

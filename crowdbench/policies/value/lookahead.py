@@ -1,5 +1,7 @@
 """CrowdNav's one-step look-ahead, batched: joint states, the 81 holonomic actions, constant-velocity propagation and
-the swept-collision reward, for all worlds × actions × pedestrians at once (torch, float32).
+the swept-collision reward, for all worlds × actions × pedestrians at once (float32). :func:`lookahead` is the fast
+path (the pedestrian rows in one compiled loop), :func:`lookahead_reference` the same arithmetic in plain torch, its
+bitwise test oracle.
 
 Conventions (CrowdNav ``multi_human_rl.py`` / ``cadrl.py`` at 20d6780):
 
@@ -146,6 +148,38 @@ def current_state(scene: Scene) -> torch.Tensor:
 def lookahead(scene: Scene, actions: torch.Tensor, dt: float, goal_tolerance: float,
               reward: CrowdNavReward = CROWDNAV_REWARD) -> tuple[torch.Tensor, torch.Tensor]:
     """Propagate every scene under every action.
+
+    Args:
+        scene: ``B`` scenes with ``K`` pedestrian slots.
+        actions: World-frame robot velocities for v_pref = 1, ``(M, 2)`` float32 (scaled by each robot's v_pref).
+        dt: Step [s].
+        goal_tolerance: Success radius about the goal [m].
+        reward: The reward constants.
+
+    Returns:
+        Next joint states ``(B, M, K, 13)`` and the rewards of the moves ``(B, M)``, float32, bitwise equal to
+        :func:`lookahead_reference`: the robot's next positions, their headings to the goal and goal distances in
+        torch, the ``B·M·K`` pedestrian rows in one compiled loop (:mod:`crowdbench.policies.value._kernels`).
+    """
+    from crowdbench.policies.value._kernels import lookahead_rows
+
+    a = actions.unsqueeze(0) * scene.v_pref.view(-1, 1, 1)  # (B, M, 2)
+    d = scene.goal.unsqueeze(1) - (scene.pos.unsqueeze(1) + a * dt)
+    rot = torch.atan2(d[..., 1], d[..., 0])
+    B, M, K = a.shape[0], a.shape[1], scene.rel.shape[1]
+    nxt, r = np.empty((B, M, K, 13), np.float32), np.empty((B, M), np.float32)
+    f = np.float32
+    lookahead_rows(a.numpy(), torch.cos(rot).numpy(), torch.sin(rot).numpy(), d.norm(dim=-1).numpy(),
+                   scene.v_pref.numpy(), scene.radius.numpy(), scene.rel.numpy(), scene.hvel.numpy(),
+                   scene.hrad.numpy(), scene.sensed.numpy(), f(dt), f(goal_tolerance), f(reward.collision),
+                   f(reward.success), f(reward.discomfort_dist), f(reward.discomfort_factor), nxt, r)
+    return torch.from_numpy(nxt), torch.from_numpy(r)
+
+
+def lookahead_reference(scene: Scene, actions: torch.Tensor, dt: float, goal_tolerance: float,
+                        reward: CrowdNavReward = CROWDNAV_REWARD) -> tuple[torch.Tensor, torch.Tensor]:
+    """:func:`lookahead` in plain torch, operation by operation — the readable version and the test oracle of the
+    compiled fast path (bitwise equal).
 
     Args:
         scene: ``B`` scenes with ``K`` pedestrian slots.
