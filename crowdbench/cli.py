@@ -128,6 +128,11 @@ def train_cmd(args: argparse.Namespace) -> int:
     if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
         if args.variant is not None or args.model:
             raise ValueError("--variant/--model: a resumed run keeps its architecture; drop them with --resume")
+        fixed = [f"--{k.replace('_', '-')}" for k in ("envs", "epochs", "mini_batches", "reward_scale")
+                 if getattr(args, k) is not None] + (["--no-anneal"] if args.no_anneal else [])
+        if fixed:
+            raise ValueError(f"{', '.join(fixed)}: a resumed run keeps its configuration; drop them with --resume "
+                             f"(only {', '.join('--' + k.replace('_', '-') for k in RESUMABLE)} may change)")
         path = checkpoints.run_checkpoint(args.resume)
         cfg = resume_config(path, **speed)
         out = args.out or os.path.dirname(os.path.abspath(path))
@@ -138,7 +143,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         overrides = {"model": model, "seed": args.seed, **speed}
         if args.no_anneal:
             overrides["anneal"] = False
-        for name in ("envs", "epochs", "mini_batches"):
+        for name in ("envs", "epochs", "mini_batches", "reward_scale"):
             if getattr(args, name) is not None:
                 overrides["num_envs" if name == "envs" else name] = getattr(args, name)
         cfg = TrainConfig.for_method(args.algo, **overrides)
@@ -158,7 +163,7 @@ def train_value_cmd(args: argparse.Namespace) -> int:
     from crowdbench.training.value import ValueTrainConfig, resume_config, train_value
 
     ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "model", "iterations", "until_success", "envs",
-                                                     "env_processes", "epochs", "mini_batches")
+                                                     "env_processes", "epochs", "mini_batches", "reward_scale")
                 if getattr(args, k) is not None] + (["--no-anneal"] if args.no_anneal else [])
     if ppo_only:
         raise ValueError(f"{', '.join(ppo_only)}: options of the PPO methods, not of {args.algo}")
@@ -407,6 +412,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="PPO epochs per iteration (default 4; fewer run faster but learned less per step: "
                         "leaderboards/schedule-study)")
     p.add_argument("--mini-batches", type=int, default=None, help="PPO mini-batches per epoch (default 4)")
+    p.add_argument("--reward-scale", type=float, default=None,
+                   help="factor on the rewards PPO sees (default 0.1; 1 = the originals' unscaled rewards)")
     p.add_argument("--no-anneal", action="store_true",
                    help="no curriculum: train at the final ρ (rho_min = 0) from the start")
     p.add_argument("--worlds", type=int, default=None,

@@ -245,3 +245,27 @@ def test_model_overrides_parse_by_field_type_and_reject_bad_input(capsys):
     assert "--model: options of the PPO methods" in capsys.readouterr().err
     assert main(["train", "h2int", "--resume", "runs/x", "--model", "d_model=64"]) == 2
     assert "keeps its architecture" in capsys.readouterr().err
+
+
+def test_reward_scale_option_sets_new_runs_and_is_refused_on_resume(capsys, monkeypatch):
+    """`--reward-scale` reaches a new run's TrainConfig; a resumed run keeps its configuration, so it and the other
+    schedule options get one clear error there naming what may change."""
+    import crowdbench.training.trainer as trainer_mod
+
+    seen = {}
+
+    def fake_train(cfg, out, resume=None):
+        seen["cfg"] = cfg
+        raise SystemExit(0)
+
+    monkeypatch.setattr(trainer_mod, "train", fake_train)
+    with pytest.raises(SystemExit):
+        main(["train", "dsrnn", "--variant", "small", "--reward-scale", "1.0", "--out", "runs/never"])
+    assert seen["cfg"].reward_scale == 1.0 and seen["cfg"].method == "dsrnn"
+    assert main(["train", "h2int", "--reward-scale", "0"]) == 2
+    assert "reward_scale=0.0; valid choices: a positive number" in capsys.readouterr().err
+    assert main(["train", "h2int", "--resume", "runs/x", "--reward-scale", "1", "--epochs", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--epochs, --reward-scale: a resumed run keeps its configuration" in err and "--minutes" in err
+    assert main(["train", "sarl", "--reward-scale", "1"]) == 2
+    assert "--reward-scale: options of the PPO methods" in capsys.readouterr().err

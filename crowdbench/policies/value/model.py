@@ -25,13 +25,16 @@ STATE_DIM = 13
 SELF_DIM = 6
 
 
-def run_mlp(seq: nn.Sequential, x: torch.Tensor) -> torch.Tensor:
-    """``seq(x)``; without autograd (look-ahead, evaluation) each ReLU runs in place on its layer's fresh output —
-    the same values without a new buffer per layer."""
-    if torch.is_grad_enabled():
-        return seq(x)
+def run_mlp(seq: nn.Sequential | tuple[nn.Module, ...], x: torch.Tensor) -> torch.Tensor:
+    """``seq(x)`` for 2-D ``x``, each Linear as the ``addmm`` that ``nn.Linear`` runs (bitwise the same, verified on
+    Q-values and gradients, without the module call per layer); without autograd (look-ahead, evaluation)
+    each ReLU runs in place on its layer's fresh output."""
+    inplace = not torch.is_grad_enabled()
     for layer in seq:
-        x = x.relu_() if isinstance(layer, nn.ReLU) else layer(x)
+        if isinstance(layer, nn.ReLU):
+            x = x.relu_() if inplace else torch.relu(x)
+        else:
+            x = torch.addmm(layer.bias, x, layer.weight.t())
     return x
 
 
@@ -79,7 +82,8 @@ class CADRLNet(nn.Module):
     def forward(self, state: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
         """Values ``(S,)`` of joint states ``(S, K, 13)`` with valid slots ``mask`` ``(S, K)``."""
         if bool(mask.all()):  # one robot's look-ahead: every slot holds a pedestrian
-            return run_mlp(self.value, state).squeeze(-1).amin(dim=1)
+            S, K, _ = state.shape
+            return run_mlp(self.value, state.reshape(S * K, -1)).view(S, K).amin(dim=1)
         pair = state.new_full(mask.shape, torch.inf)
         pair[mask] = run_mlp(self.value, state[mask]).squeeze(-1)
         return pair.amin(dim=1)
@@ -99,6 +103,8 @@ class SARLNet(nn.Module):
         self.mlp1 = mlp((STATE_DIM, *cfg.mlp1_dims), last_relu=True)
         self.mlp2 = mlp((cfg.mlp1_dims[-1], *cfg.mlp2_dims))
         self.attention = mlp((2 * cfg.mlp1_dims[-1], *cfg.attention_dims, 1))
+        # the score MLP after its first layer (that layer is split in forward); a plain tuple, not a submodule
+        self._attention_rest: tuple[nn.Module, ...] = tuple(self.attention)[1:]
         self.mlp3 = mlp((SELF_DIM + cfg.mlp2_dims[-1], *cfg.mlp3_dims, 1))
 
     def _pool(self, state: torch.Tensor, score: torch.Tensor, feat: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
@@ -134,7 +140,7 @@ class SARLNet(nn.Module):
             z.view(S, K, -1).add_(per_state.unsqueeze(1))
         else:
             z = z + per_state[torch.arange(S).unsqueeze(1).expand(S, K)[mask]]
-        score = spread(run_mlp(self.attention[1:], z).squeeze(-1))
+        score = spread(run_mlp(self._attention_rest, z).squeeze(-1))
         return self._pool(state, score, spread(run_mlp(self.mlp2, h)), mask)
 
     def reference(self, state: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
