@@ -106,6 +106,11 @@ def evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+NEW_RUN_ONLY = ("envs", "epochs", "mini_batches", "reward_scale")
+"""``crowdbench train`` options of a PPO run's schedule: set on a new run, refused on a resumed one (with
+``--no-anneal``, ``--variant``, ``--model``)."""
+
+
 def train_cmd(args: argparse.Namespace) -> int:
     """Train a PPO method (H²INT or an ablation) with rsl-rl; checkpoints, curve and logs go to ``--out``."""
     from crowdbench.training.value import VALUE_METHODS
@@ -128,8 +133,8 @@ def train_cmd(args: argparse.Namespace) -> int:
     if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
         if args.variant is not None or args.model:
             raise ValueError("--variant/--model: a resumed run keeps its architecture; drop them with --resume")
-        fixed = [f"--{k.replace('_', '-')}" for k in ("envs", "epochs", "mini_batches", "reward_scale")
-                 if getattr(args, k) is not None] + (["--no-anneal"] if args.no_anneal else [])
+        fixed = [f"--{k.replace('_', '-')}" for k in NEW_RUN_ONLY if getattr(args, k) is not None]
+        fixed += ["--no-anneal"] if args.no_anneal else []
         if fixed:
             raise ValueError(f"{', '.join(fixed)}: a resumed run keeps its configuration; drop them with --resume "
                              f"(only {', '.join('--' + k.replace('_', '-') for k in RESUMABLE)} may change)")
@@ -143,7 +148,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         overrides = {"model": model, "seed": args.seed, **speed}
         if args.no_anneal:
             overrides["anneal"] = False
-        for name in ("envs", "epochs", "mini_batches", "reward_scale"):
+        for name in NEW_RUN_ONLY:
             if getattr(args, name) is not None:
                 overrides["num_envs" if name == "envs" else name] = getattr(args, name)
         cfg = TrainConfig.for_method(args.algo, **overrides)
