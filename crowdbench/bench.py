@@ -240,9 +240,11 @@ def _act_ms(policy: Any, obs: dict[str, np.ndarray], repeats: int, calls: int = 
     return _repeat(timed, repeats)
 
 
-def decision_ms(policy_name: str, repeats: int, num_humans: int = 20, **policy_kwargs: Any) -> dict[str, float]:
+def decision_ms(policy_name: str, repeats: int, num_humans: int = 20, threads: int = 1,
+                **policy_kwargs: Any) -> dict[str, float]:
     """One decision of a registered robot policy for one robot [ms]: circle crossing, ``num_humans`` latent-responsive
-    pedestrians after 20 steps (a realistic crowd around the robot), the policy's own observation, one thread."""
+    pedestrians after 20 steps (a realistic crowd around the robot), the policy's own observation, ``threads`` torch
+    threads (restored afterwards)."""
     import torch
 
     from crowdbench.config import WorldConfig
@@ -250,32 +252,45 @@ def decision_ms(policy_name: str, repeats: int, num_humans: int = 20, **policy_k
     from crowdbench.robots import make_observation
     from crowdbench.worlds import CrowdWorld
 
-    torch.set_num_threads(1)
-    cfg = WorldConfig(num_humans=num_humans)
-    policy = make_policy(policy_name, cfg, **policy_kwargs)
-    world = CrowdWorld(cfg, 1, "circle_crossing", "responsive_orca", {"responsiveness": 0.5})
-    world.reset(seeds=[0])
-    for _ in range(20):
-        world.step(np.zeros((1, 2)))
-    return _act_ms(policy, make_observation(policy.observation, cfg, **policy.observation_kwargs).build(world), repeats)
+    before = torch.get_num_threads()
+    torch.set_num_threads(threads)
+    try:
+        cfg = WorldConfig(num_humans=num_humans)
+        policy = make_policy(policy_name, cfg, **policy_kwargs)
+        world = CrowdWorld(cfg, 1, "circle_crossing", "responsive_orca", {"responsiveness": 0.5})
+        world.reset(seeds=[0])
+        for _ in range(20):
+            world.step(np.zeros((1, 2)))
+        obs = make_observation(policy.observation, cfg, **policy.observation_kwargs).build(world)
+        return _act_ms(policy, obs, repeats)
+    finally:
+        torch.set_num_threads(before)
 
 
-def decision_ms_all(repeats: int) -> dict[str, Any]:
-    """:func:`decision_ms` of every registered robot policy — a policy added to the registry (or through the
-    ``crowdbench.policies`` entry point) gets its figure without touching this module. Policies that cannot be built
-    with default arguments are reported with the reason."""
+def decision_ms_all(repeats: int, threads: int = 1) -> dict[str, Any]:
+    """:func:`decision_ms` of every registered robot policy with ``threads`` torch threads — a policy added to the
+    registry (or through the ``crowdbench.policies`` entry point) gets its figure without touching this module.
+    Policies that cannot be built with default arguments are reported with the reason."""
     from crowdbench.policies import POLICIES
 
     out: dict[str, Any] = {}
     for name in POLICIES.names():
         try:
-            out[name] = decision_ms(name, repeats)
+            out[name] = decision_ms(name, repeats, threads=threads)
         except Exception as e:  # noqa: BLE001 - reported, the other figures still run
             out[name] = {"skipped": f"{type(e).__name__}: {e}"}
     for name in ("cadrl", "sarl"):  # look-ahead cost grows with the pedestrians sensed: also the worst case
         if name in out and "skipped" not in out[name]:
-            out[f"{name}, all sensed"] = decision_ms(name, repeats, sensing_range=1e9)
+            out[f"{name}, all sensed"] = decision_ms(name, repeats, threads=threads, sensing_range=1e9)
     return out
+
+
+def all_cores() -> int:
+    """The cores this process may run on (its affinity where the OS reports one)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
 
 
 def run(quick: bool = False) -> dict[str, Any]:
@@ -298,6 +313,9 @@ def run(quick: bool = False) -> dict[str, Any]:
                                                                            if n == 200 else (10 if quick else 60), rep)
         res["h2int_inference_ms"] = h2int_inference_ms(rep)
         res["decision_ms"] = decision_ms_all(rep)
+    # a robot's computer gives its planner every core: the same decisions (bitwise for CADRL and SARL, tested),
+    # the products split across threads
+    res["decision_ms_all_cores"] = {"threads": all_cores(), **decision_ms_all(rep, all_cores())}
     res["train_steps_per_s"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3)
     with one_core():
         res["train_steps_per_s_1_core"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3, 1, 1)
@@ -342,6 +360,12 @@ def results_markdown(res: dict[str, Any]) -> str:
             lines.append(f"| decision_ms ({name}) | 20 | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
         else:
             lines.append(f"| decision_ms ({name}) | 20 | 1 | skipped: {s['skipped']} | |")
+    by_cores = dict(res.get("decision_ms_all_cores", {}))
+    threads = by_cores.pop("threads", None)
+    for name, s in by_cores.items():
+        if "median" in s:
+            lines.append(f"| decision_ms ({name}, {threads} threads) | 20 | 1 | {s['median']:.3f} | "
+                         f"{s['spread']:.3f} |")
     lines += ["", "Targets: " + "; ".join(f"{k} {'≤' if 'ms' in k else '≥'} {v:,}" for k, v in TARGETS.items()), ""]
     return "\n".join(lines)
 
