@@ -108,7 +108,7 @@ def evaluate(args: argparse.Namespace) -> int:
 
 NEW_RUN_ONLY = ("envs", "epochs", "mini_batches", "reward_scale")
 """``crowdbench train`` options of a PPO run's schedule: set on a new run, refused on a resumed one (with
-``--no-anneal``, ``--variant``, ``--model``)."""
+``--anneal``/``--no-anneal``, ``--variant``, ``--model``)."""
 
 
 def train_cmd(args: argparse.Namespace) -> int:
@@ -134,7 +134,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         if args.variant is not None or args.model:
             raise ValueError("--variant/--model: a resumed run keeps its architecture; drop them with --resume")
         fixed = [f"--{k.replace('_', '-')}" for k in NEW_RUN_ONLY if getattr(args, k) is not None]
-        fixed += ["--no-anneal"] if args.no_anneal else []
+        fixed += [] if args.anneal is None else ["--anneal" if args.anneal else "--no-anneal"]
         if fixed:
             raise ValueError(f"{', '.join(fixed)}: a resumed run keeps its configuration; drop them with --resume "
                              f"(only {', '.join('--' + k.replace('_', '-') for k in RESUMABLE)} may change)")
@@ -146,8 +146,8 @@ def train_cmd(args: argparse.Namespace) -> int:
         if args.model:
             model = {**(model or {}), **method.model_overrides(args.model)}
         overrides = {"model": model, "seed": args.seed, **speed}
-        if args.no_anneal:
-            overrides["anneal"] = False
+        if args.anneal is not None:
+            overrides["anneal"] = args.anneal
         for name in NEW_RUN_ONLY:
             if getattr(args, name) is not None:
                 overrides["num_envs" if name == "envs" else name] = getattr(args, name)
@@ -169,7 +169,7 @@ def train_value_cmd(args: argparse.Namespace) -> int:
 
     ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "model", "iterations", "until_success", "envs",
                                                      "env_processes", "epochs", "mini_batches", "reward_scale")
-                if getattr(args, k) is not None] + (["--no-anneal"] if args.no_anneal else [])
+                if getattr(args, k) is not None] + ([] if args.anneal is None else ["--anneal/--no-anneal"])
     if ppo_only:
         raise ValueError(f"{', '.join(ppo_only)}: options of the PPO methods, not of {args.algo}")
     speed = {k: getattr(args, k) for k in ("minutes", "threads") if getattr(args, k) is not None}
@@ -419,8 +419,10 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--mini-batches", type=int, default=None, help="PPO mini-batches per epoch (default 4)")
     p.add_argument("--reward-scale", type=float, default=None,
                    help="factor on the rewards PPO sees (default 0.1; 1 = the originals' unscaled rewards)")
-    p.add_argument("--no-anneal", action="store_true",
-                   help="no curriculum: train at the final ρ (rho_min = 0) from the start")
+    p.add_argument("--anneal", action=argparse.BooleanOptionalAction, default=None,
+                   help="the responsiveness curriculum (ρ annealed from 0.8 to 0; H²INT's default) or, with "
+                        "--no-anneal, training at the final ρ = 0 from the start (DS-RNN's and AIG-GST's default, "
+                        "the originals' invisible robot)")
     p.add_argument("--worlds", type=int, default=None,
                    help="cadrl/sarl: episodes run at once (default 10; same episode and update counts)")
     p.add_argument("--il-episodes", type=int, default=None, help="cadrl/sarl: ORCA demonstrations (default 3000)")

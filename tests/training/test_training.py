@@ -269,3 +269,26 @@ def test_reward_scale_option_sets_new_runs_and_is_refused_on_resume(capsys, monk
     assert "--epochs, --reward-scale: a resumed run keeps its configuration" in err and "--minutes" in err
     assert main(["train", "sarl", "--reward-scale", "1"]) == 2
     assert "--reward-scale: options of the PPO methods" in capsys.readouterr().err
+
+
+def test_anneal_option_overrides_the_methods_curriculum_default(capsys, monkeypatch):
+    """DS-RNN trains at ρ = 0 by default (the originals' invisible robot); `--anneal` gives it H²INT's curriculum,
+    `--no-anneal` takes H²INT's away, nothing keeps each method's own; resumed runs and value methods refuse both."""
+    import crowdbench.training.trainer as trainer_mod
+
+    seen = []
+
+    def fake_train(cfg, out, resume=None):
+        seen.append(cfg)
+        raise SystemExit(0)
+
+    monkeypatch.setattr(trainer_mod, "train", fake_train)
+    for argv in (["dsrnn"], ["dsrnn", "--anneal"], ["h2int"], ["h2int", "--no-anneal"]):
+        with pytest.raises(SystemExit):
+            main(["train", *argv, "--out", "runs/never"])
+    assert [c.anneal for c in seen] == [False, True, True, False]
+    assert seen[1].rho_init == 0.8 and seen[1].learning_rate == 4e-5  # the curriculum, DS-RNN's own PPO recipe
+    assert main(["train", "dsrnn", "--resume", "runs/x", "--anneal"]) == 2
+    assert "--anneal: a resumed run keeps its configuration" in capsys.readouterr().err
+    assert main(["train", "cadrl", "--no-anneal"]) == 2
+    assert "--anneal/--no-anneal: options of the PPO methods" in capsys.readouterr().err
