@@ -315,7 +315,8 @@ def run(quick: bool = False) -> dict[str, Any]:
         res["decision_ms"] = decision_ms_all(rep)
     # a robot's computer gives its planner every core: the same decisions (bitwise for CADRL and SARL, tested),
     # the products split across threads
-    res["decision_ms_all_cores"] = {"threads": all_cores(), **decision_ms_all(rep, all_cores())}
+    cores = all_cores()
+    res["decision_ms_all_cores"] = {"threads": cores, **decision_ms_all(rep, cores)}
     res["train_steps_per_s"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3)
     with one_core():
         res["train_steps_per_s_1_core"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3, 1, 1)
@@ -355,17 +356,13 @@ def results_markdown(res: dict[str, Any]) -> str:
         lines.append(f"| train_steps_per_s ({method}, its recipe, 2 cores) | 10–30 | 192 | {figure} |")
     s = res["h2int_inference_ms"]
     lines.append(f"| h2int_inference_ms | 12 seen | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
-    for name, s in res.get("decision_ms", {}).items():
-        if "median" in s:
-            lines.append(f"| decision_ms ({name}) | 20 | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
-        else:
-            lines.append(f"| decision_ms ({name}) | 20 | 1 | skipped: {s['skipped']} | |")
     by_cores = dict(res.get("decision_ms_all_cores", {}))
     threads = by_cores.pop("threads", None)
-    for name, s in by_cores.items():
-        if "median" in s:
-            lines.append(f"| decision_ms ({name}, {threads} threads) | 20 | 1 | {s['median']:.3f} | "
-                         f"{s['spread']:.3f} |")
+    for suffix, figures in (("", res.get("decision_ms", {})), (f", {threads} threads", by_cores)):
+        for name, s in figures.items():
+            label = f"| decision_ms ({name}{suffix}) | 20 | 1 |"
+            lines.append(f"{label} {s['median']:.3f} | {s['spread']:.3f} |" if "median" in s
+                         else f"{label} skipped: {s['skipped']} | |")
     lines += ["", "Targets: " + "; ".join(f"{k} {'≤' if 'ms' in k else '≥'} {v:,}" for k, v in TARGETS.items()), ""]
     return "\n".join(lines)
 

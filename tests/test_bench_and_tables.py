@@ -160,7 +160,8 @@ def test_trajectory_panels_are_drawn(tmp_path):
 @pytest.mark.parametrize("name", ["cadrl", "sarl"])
 def test_value_policies_decide_bitwise_alike_on_one_and_two_threads(name):
     """``decision_ms_all_cores`` times the same policy: the look-ahead's products split over threads give the same
-    actions, bit for bit, over a seeded episode (measured 2.85 → 1.71 ms per SARL decision on a 2-core machine)."""
+    actions, bit for bit, over a seeded episode (`benchmarks/bench_decision.py`: 2.0 → 1.7 ms per SARL decision on
+    a 2-core machine)."""
     import torch
 
     from crowdbench.config import WorldConfig
