@@ -191,7 +191,7 @@ def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[s
             lo = [100 * min(p[1] for p in pts[x]) for x in xs]
             hi = [100 * max(p[2] for p in pts[x]) for x in xs]
             n_seeds = len(family)
-            (line,) = ax.plot(xs, mean, "o-", label=label + (f" ({n_seeds} seeds)" if n_seeds > 1 else ""))
+            (line,) = ax.plot(xs, mean, "o-", label=f"{label} ({n_seeds} seed{'s' if n_seeds > 1 else ''})")
             ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
             if n_seeds > 1:
                 low = [100 * min(p[0] for p in pts[x]) for x in xs]
