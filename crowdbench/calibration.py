@@ -10,11 +10,12 @@ generated from it (:func:`markdown`).
 from __future__ import annotations
 
 import json
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field, replace
 from typing import Any
 
 from crowdbench.io import write_text
+from crowdbench.progress import Progress
 
 PAPER = {"orca": {"I": (97, 91, 78), "II": (93, 69, 43)}, "social_force": {"I": (65, 46, 31), "II": (60, 27, 12)}}
 """The paper's success rates [%]: Table I (ρ = 0.7 / 0.5 / 0.3, N = 20), Table II (ρ = 0, N = 10 / 20 / 30)."""
@@ -64,13 +65,20 @@ def evaluate(scenario: Scenario, policy: str, episodes: int, seed: int = 0) -> l
     return [{"scenario": scenario.name, **r} for r in rows]
 
 
-def run(episodes: int = 500, seed: int = 0, workers: int = 2, steps: tuple[Scenario, ...] = STEPS
-        ) -> list[dict[str, Any]]:
-    """Every step × {orca, social_force} × the six cells, ``workers`` processes."""
+def run(episodes: int = 500, seed: int = 0, workers: int = 2, steps: tuple[Scenario, ...] = STEPS,
+        progress: Progress | None = None) -> list[dict[str, Any]]:
+    """Every step × {orca, social_force} × the six cells, ``workers`` processes; ``progress`` counts finished
+    (step, robot) jobs. Results in step, then robot order, whatever order the jobs finish in."""
     jobs = [(s, p) for s in steps for p in ("orca", "social_force")]
+    parts: list[list[dict[str, Any]]] = [[] for _ in jobs]
     with ProcessPoolExecutor(workers) as pool:
-        parts = list(pool.map(evaluate, [j[0] for j in jobs], [j[1] for j in jobs], [episodes] * len(jobs),
-                              [seed] * len(jobs)))
+        futures = {pool.submit(evaluate, s, p, episodes, seed): k for k, (s, p) in enumerate(jobs)}
+        for done, future in enumerate(as_completed(futures), 1):
+            parts[futures[future]] = future.result()
+            if progress is not None:
+                progress.update(done)
+    if progress is not None:
+        progress.close()
     return [r for part in parts for r in part]
 
 

@@ -270,7 +270,10 @@ def calibrate_cmd(args: argparse.Namespace) -> int:
         if bad:
             raise ValueError(f"--steps {bad}; valid choices: 0 … {len(steps) - 1}")
         steps = tuple(steps[k] for k in wanted)
-    results = calibration.run(args.episodes, args.seed, args.workers, steps)
+    from crowdbench.progress import Progress
+
+    bar = Progress(2 * len(steps), "scenario × robot jobs", f"{6 * args.episodes} episodes each: ")
+    results = calibration.run(args.episodes, args.seed, args.workers, steps, progress=bar)
     meta = {"command": "crowdbench " + " ".join(sys.argv[1:]), "episodes": args.episodes, "seed": args.seed}
     if args.json:
         calibration.save(results, args.json, meta)

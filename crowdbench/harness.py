@@ -311,24 +311,28 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
         write_text(os.path.join(out, f"{e.slug}.json"),
                    json.dumps({"meta": meta, "results": rows}, indent=2) + "\n")
         write_text(os.path.join(out, f"{e.slug}.md"), markdown(rows))
-    everyone, groups = gather(out, suite, board, {e.label: e.group for e in entries})
+    everyone, groups, planners = gather(out, suite, board, {e.label: e.group for e in entries},
+                                        {e.label: fps[e.label] for e in entries})
     write_text(os.path.join(out, "LEADERBOARD.md"),
                leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name))
     if {"I", "II"} & set(suite.tables):
-        plot_board(everyone, os.path.join(out, "success.png"), groups)
+        plot_board(everyone, os.path.join(out, "success.png"), groups, planners=planners)
         if "ablation" in groups.values():
-            plot_board(everyone, os.path.join(out, "ablation.png"), groups, rows="ablation")
+            plot_board(everyone, os.path.join(out, "ablation.png"), groups, rows="ablation", planners=planners)
     return board
 
 
-def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], groups: dict[str, str]
-           ) -> tuple[dict[str, list[dict[str, Any]]], dict[str, str]]:
+def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], groups: dict[str, str],
+           fingerprints: dict[str, dict[str, Any]]
+           ) -> tuple[dict[str, list[dict[str, Any]]], dict[str, str], frozenset[str]]:
     """The run's ``board`` plus every other method file in ``out`` scored on the same suite (same digest), so a run
     of some methods leaves the others on ``LEADERBOARD.md``; in leaderboard order (:data:`~crowdbench.leaderboard.
-    METHODS`, each method's other training seeds after it, then the rest by label). Returns rows and groups."""
+    METHODS`, each method's other training seeds after it, then the rest by label). Returns rows, groups and the
+    planners (labels whose fingerprint — ``fingerprints`` for the run's entries, the stored one otherwise — has no
+    checkpoint)."""
     from crowdbench.leaderboard import METHODS
 
-    rows, groups = {}, dict(groups)
+    rows, groups, fingerprints = {}, dict(groups), dict(fingerprints)
     for path in sorted(Path(out).glob("*.json")):
         try:
             d = json.loads(path.read_text())
@@ -338,6 +342,7 @@ def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], group
         if isinstance(meta, dict) and meta.get("suite_digest") == suite.digest() and "label" in meta:
             rows[meta["label"]] = d["results"]
             groups.setdefault(meta["label"], meta.get("group", "main"))
+            fingerprints.setdefault(meta["label"], meta.get("fingerprint") or {})
     rows.update(board)
     order = [m.label for m in METHODS]
 
@@ -346,7 +351,8 @@ def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], group
         base = (group.split(":", 1)[1] if ":" in group else "h2int") if group.startswith("seeds") else label
         return (order.index(base) if base in order else len(order), base != label, label)
 
-    return {lb: rows[lb] for lb in sorted(rows, key=key)}, groups
+    planners = frozenset(lb for lb in rows if not fingerprints.get(lb, {}).get("checkpoint_sha256"))
+    return {lb: rows[lb] for lb in sorted(rows, key=key)}, groups, planners
 
 
 def print_progress(line: str) -> None:

@@ -154,13 +154,18 @@ def save(results: list[dict[str, Any]], json_path: str | None, md_path: str | No
         write_text(md_path, markdown(results))
 
 
+def legend_label(label: str, n_seeds: int, trained: bool = True) -> str:
+    """A figure's legend entry: a learned method names its training-seed count, a planner (nothing trained) none."""
+    return f"{label} ({n_seeds} seed{'s' if n_seeds > 1 else ''})" if trained else label
+
+
 def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[str, str] | None = None,
-               rows: str = "main", reference: str = "h2int") -> None:
+               rows: str = "main", reference: str = "h2int", planners: frozenset[str] = frozenset()) -> None:
     """Success against the response regime ρ (Table I, N = 20) and against crowd size N (Table II, ρ = 0), one line
     per method of group ``rows`` (``main``; or ``ablation``, headed by ``reference``: the paper's ablation figure).
     A method with several training seeds (entries of group ``seeds:<label>``) is drawn at the seeds' mean, with error
     bars from the lowest to the highest seed and a band enveloping the seeds' Wilson 95 % intervals; one seed: its
-    interval."""
+    interval. The legend gives each learned method's seed count; ``planners`` (labels with no checkpoint) get none."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -191,7 +196,7 @@ def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[s
             lo = [100 * min(p[1] for p in pts[x]) for x in xs]
             hi = [100 * max(p[2] for p in pts[x]) for x in xs]
             n_seeds = len(family)
-            (line,) = ax.plot(xs, mean, "o-", label=f"{label} ({n_seeds} seed{'s' if n_seeds > 1 else ''})")
+            (line,) = ax.plot(xs, mean, "o-", label=legend_label(label, n_seeds, label not in planners))
             ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
             if n_seeds > 1:
                 low = [100 * min(p[0] for p in pts[x]) for x in xs]

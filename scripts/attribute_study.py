@@ -1,5 +1,6 @@
 """Does the pedestrians' attribute randomisation explain H²INT's gap to the paper? Success at N = 20 with the
-calibrated scenario's randomised radius U(0.3, 0.5) m and speed U(0.5, 1.5) m/s switched off piece by piece
+calibrated scenario's randomised radius U(0.3, 0.5) m and speed U(0.5, 1.5) m/s switched off piece by piece, and
+with the speeds capped at 1 m/s as CrowdNav++'s ORCA walks its pedestrians (calibration step 7, not adopted)
 (evaluation only: the policies were trained with both randomised), 500 episodes per cell, evaluation seed 0.
 
 Usage: ``python scripts/attribute_study.py [OUT.json]`` (default ``leaderboards/attribute-study.json``).
@@ -16,11 +17,12 @@ from crowdbench.evaluation import run_episodes, summarize
 from crowdbench.io import write_text
 from crowdbench.policies import make_policy
 
-POLICIES = (("h2int", {}), ("h2int", {"checkpoint": "h2int-seed2"}))
+POLICIES = (("h2int", {}), ("h2int", {"checkpoint": "h2int-seed1"}), ("h2int", {"checkpoint": "h2int-seed2"}))
 SETTINGS = (("default (r U(.3,.5), v U(.5,1.5))", {}),
             ("radius fixed 0.3", {"human_radius_range": None}),
             ("speed fixed 1.0", {"human_v_pref_range": None}),
-            ("both fixed", {"human_radius_range": None, "human_v_pref_range": None}))
+            ("both fixed", {"human_radius_range": None, "human_v_pref_range": None}),
+            ("speed capped 1.0 (CrowdNav++'s ORCA)", {"human_speed_cap": 1.0}))
 
 
 def main(out: str = "leaderboards/attribute-study.json") -> None:

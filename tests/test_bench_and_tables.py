@@ -90,6 +90,20 @@ def test_calibration_table_marks_cells_within_tolerance():
     assert "**97.0**" in row and "| 80.0 |" in row  # 80 is 11 points from the paper's 91: not within ±5
 
 
+def test_calibration_run_reports_progress_and_keeps_step_order():
+    import io
+
+    from crowdbench import calibration
+    from crowdbench.progress import Progress
+
+    stream = io.StringIO()
+    steps = calibration.STEPS[-2:]
+    res = calibration.run(episodes=2, workers=2, steps=steps, progress=Progress(4, "jobs", stream=stream))
+    assert [(r["scenario"], r["policy"]) for r in res[::6]] == [(s.name, p) for s in steps
+                                                                 for p in ("orca", "social_force")]
+    assert "4/4 jobs" in stream.getvalue()
+
+
 def test_seed_rows_report_mean_and_spread():
     def rows(p):
         return [{"policy": "x", "table": "I", "row": "High", "success_rate": p, "collision_rate": 1 - p,
