@@ -4,7 +4,10 @@ leaderboard: regenerate into a fresh folder, then compare with the published one
     crowdbench leaderboard run --suite paper --force --out /tmp/regenerated
     python scripts/compare_leaderboards.py leaderboards /tmp/regenerated
 
-Exit status 0 when every method file, every stored cell and LEADERBOARD.md agree; otherwise the differences are listed.
+Exit status 0 when every method file, every stored cell and LEADERBOARD.md agree; otherwise the differences are listed,
+each differing cell with the CPU models that made the two copies (a cell records its CPU; learned policies' closed loops
+turn the last-bit rounding differences between instruction sets into different episodes, so a difference between two
+CPU models is expected, one on the same model is a reproducibility failure).
 """
 
 from __future__ import annotations
@@ -13,7 +16,7 @@ import json
 import sys
 from pathlib import Path
 
-VOLATILE = {"wall_s", "provenance"}
+VOLATILE = {"wall_s", "provenance", "cpu"}
 
 
 def strip(x):
@@ -28,13 +31,17 @@ def main(a: str, b: str) -> int:
     a_dir, b_dir = Path(a), Path(b)
     files = sorted({p.relative_to(b_dir) for p in b_dir.rglob("*.json")} & {p.relative_to(a_dir)
                                                                             for p in a_dir.rglob("*.json")})
-    bad = [str(f) for f in files
+    bad = [f.as_posix() for f in files
            if strip(json.loads((a_dir / f).read_text())) != strip(json.loads((b_dir / f).read_text()))]
     if (a_dir / "LEADERBOARD.md").read_text() != (b_dir / "LEADERBOARD.md").read_text():
         bad.append("LEADERBOARD.md")
     print(f"compared {len(files)} JSON files and LEADERBOARD.md: {'identical' if not bad else 'DIFFERENT'}")
     for f in bad:
-        print(f"  differs: {f}")
+        cpus = [json.loads((d / f).read_text()).get("cpu", "unrecorded") if f.startswith("cells") else None
+                for d in (a_dir, b_dir)]
+        where = "" if cpus[0] is None else (f" (same CPU: {cpus[0]})" if cpus[0] == cpus[1]
+                                             else f" (CPUs {cpus[0]} → {cpus[1]})")
+        print(f"  differs: {f}{where}")
     return 1 if bad else 0
 
 
