@@ -106,7 +106,7 @@ def evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
-NEW_RUN_ONLY = ("envs", "epochs", "mini_batches", "reward_scale")
+NEW_RUN_ONLY = ("envs", "epochs", "mini_batches", "reward_scale", "learning_rate", "schedule")
 """``crowdbench train`` options of a PPO run's schedule: set on a new run, refused on a resumed one (with
 ``--anneal``/``--no-anneal``, ``--variant``, ``--model``)."""
 
@@ -167,8 +167,8 @@ def train_value_cmd(args: argparse.Namespace) -> int:
     """CADRL / SARL: imitation of the ORCA robot, then TD learning (:mod:`crowdbench.training.value`)."""
     from crowdbench.training.value import ValueTrainConfig, resume_config, train_value
 
-    ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "model", "iterations", "until_success", "envs",
-                                                     "env_processes", "epochs", "mini_batches", "reward_scale")
+    ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "model", "iterations", "until_success",
+                                                     "env_processes", *NEW_RUN_ONLY)
                 if getattr(args, k) is not None] + ([] if args.anneal is None else ["--anneal/--no-anneal"])
     if ppo_only:
         raise ValueError(f"{', '.join(ppo_only)}: options of the PPO methods, not of {args.algo}")
@@ -422,6 +422,11 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--mini-batches", type=int, default=None, help="PPO mini-batches per epoch (default 4)")
     p.add_argument("--reward-scale", type=float, default=None,
                    help="factor on the rewards PPO sees (default 0.1; 1 = the originals' unscaled rewards)")
+    p.add_argument("--learning-rate", type=float, default=None,
+                   help="initial Adam learning rate (H²INT 3e-4, adapted; DS-RNN and AIG-GST 4e-5, fixed)")
+    p.add_argument("--schedule", default=None, choices=("adaptive", "fixed"),
+                   help="learning-rate schedule: adaptive (rsl-rl's KL-target rule; H²INT's) or fixed (the "
+                        "originals' for DS-RNN and AIG-GST)")
     p.add_argument("--anneal", action=argparse.BooleanOptionalAction, default=None,
                    help="the responsiveness curriculum (ρ annealed from 0.8 to 0; H²INT's default) or, with "
                         "--no-anneal, training at the final ρ = 0 from the start (DS-RNN's and AIG-GST's default, "

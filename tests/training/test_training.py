@@ -292,3 +292,21 @@ def test_anneal_option_overrides_the_methods_curriculum_default(capsys, monkeypa
     assert "--anneal: a resumed run keeps its configuration" in capsys.readouterr().err
     assert main(["train", "cadrl", "--no-anneal"]) == 2
     assert "--anneal/--no-anneal: options of the PPO methods" in capsys.readouterr().err
+
+
+def test_learning_rate_options_override_the_methods_recipe_on_new_runs_only(capsys, monkeypatch):
+    import crowdbench.training.trainer as trainer_mod
+
+    seen = []
+
+    def fake_train(cfg, out, resume=None):
+        seen.append(cfg)
+        raise SystemExit(0)
+
+    monkeypatch.setattr(trainer_mod, "train", fake_train)
+    for argv in (["dsrnn"], ["dsrnn", "--learning-rate", "3e-4", "--schedule", "adaptive"]):
+        with pytest.raises(SystemExit):
+            main(["train", *argv, "--out", "runs/never"])
+    assert [(c.learning_rate, c.schedule) for c in seen] == [(4e-5, "fixed"), (3e-4, "adaptive")]
+    assert main(["train", "dsrnn", "--resume", "runs/x", "--learning-rate", "1e-3"]) == 2
+    assert "--learning-rate: a resumed run keeps its configuration" in capsys.readouterr().err
