@@ -7,8 +7,8 @@ A checkpoint is a plain dict of tensors and built-in types, written atomically w
      "model": {...architecture config...}, "n_max": 30, "actor": state_dict, ...}
 
 Training checkpoints add the critic, optimiser, environment and RNG state needed to resume exactly
-(:mod:`crowdbench.training.trainer`). Files of the previous H²INT format (``crowdbench.h2int/1``) still load for
-evaluation (:data:`LEGACY_FORMATS`); they cannot be resumed.
+(:mod:`crowdbench.training.trainer`). Files of the previous H²INT format (``crowdbench.h2int/1``, crowdbench ≤ 0.2
+before the training paths were consolidated) are refused with one error: no shipped checkpoint uses it any more.
 """
 
 from __future__ import annotations
@@ -18,8 +18,6 @@ from pathlib import Path
 from typing import Any
 
 FORMAT = "crowdbench.checkpoint/2"
-LEGACY_FORMATS = {"crowdbench.h2int/1": "h2int"}
-"""Older formats that still load for evaluation, with the method they hold."""
 SHIPPED = Path(__file__).resolve().parent / "policies"
 """Shipped checkpoints are package data: ``policies/<method>/checkpoints/<name>.pt``, or the folder
 :data:`FOLDERS` names for methods that share a sub-package."""
@@ -83,9 +81,10 @@ def load(path: str | os.PathLike, method: str | None = None) -> dict[str, Any]:
     except Exception as e:  # noqa: BLE001 - a corrupt or foreign file: one clear line
         raise ValueError(f"checkpoint {path!r} could not be read ({type(e).__name__}: {e})") from None
     fmt = ckpt.get("format") if isinstance(ckpt, dict) else None
-    if fmt in LEGACY_FORMATS:
-        ckpt = {**ckpt, "method": LEGACY_FORMATS[fmt]}
-    elif fmt != FORMAT:
+    if isinstance(fmt, str) and fmt.startswith("crowdbench.") and fmt != FORMAT:
+        raise ValueError(f"checkpoint {path!r} was written by an older crowdbench (format {fmt!r}); this version "
+                         f"reads only {FORMAT!r}: retrain it with `crowdbench train`")
+    if fmt != FORMAT:
         raise ValueError(f"checkpoint {path!r} is not a crowdbench checkpoint (format={fmt!r}; expected {FORMAT!r})")
     if method is not None and ckpt.get("method") != method:
         raise ValueError(f"checkpoint {path!r} holds method {ckpt.get('method')!r}, not {method!r}")

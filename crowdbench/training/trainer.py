@@ -233,12 +233,12 @@ class Trainer:
 
 
 def load_resumable(path: str) -> dict[str, Any]:
-    """A checkpoint that today's training path can continue (clear error for older formats)."""
+    """A checkpoint that today's training path can continue (clear error for weights-only files)."""
     ckpt = checkpoints.load(path)
-    if ckpt.get("format") != checkpoints.FORMAT or "train_config" not in ckpt:
-        raise ValueError(f"--resume: {path!r} is a {ckpt.get('format')} checkpoint from an older crowdbench, whose "
-                         "training path no longer exists; it cannot be resumed (its weights still evaluate: "
-                         "crowdbench evaluate h2int --checkpoint PATH). Start a new run.")
+    if "train_config" not in ckpt:
+        raise ValueError(f"--resume: {path!r} holds a policy's weights but no training state; it cannot be resumed "
+                         f"(it evaluates: crowdbench evaluate {ckpt.get('method')} --checkpoint PATH). Start a new "
+                         "run.")
     return ckpt
 
 

@@ -160,18 +160,23 @@ def test_curves_command_plots_and_tabulates_runs(runs, tmp_path, capsys):
     assert printed.count("| h2int 1×2 seed 0 | iteration 2 |") == 4  # two runs, printed once per figure
 
 
-def test_legacy_checkpoints_evaluate_but_do_not_resume(tmp_path, capsys):
-    """The shipped ablations are `crowdbench.h2int/1` files of the previous training path: their weights load and
-    act; resuming them is one clear error."""
-    legacy = checkpoints.shipped("h2int", "meanpool")
-    assert torch.load(legacy, weights_only=True)["format"] == "crowdbench.h2int/1"
-    policy = H2INTPolicy(checkpoint="meanpool")
+def test_old_format_checkpoints_are_refused_and_weights_only_files_do_not_resume(tmp_path, capsys):
+    """The previous H²INT format (`crowdbench.h2int/1`) is one clear error; a checkpoint without its training state
+    evaluates but cannot be resumed."""
+    old = tmp_path / "old.pt"
+    torch.save({"format": "crowdbench.h2int/1", "model": {}, "actor": {}}, old)
+    with pytest.raises(ValueError, match="older crowdbench .*'crowdbench.h2int/1'.*reads only 'crowdbench.checkp"):
+        H2INTPolicy(checkpoint=str(old))
+    ckpt = torch.load(checkpoints.shipped("h2int", "meanpool"), weights_only=True)
+    weights = tmp_path / "weights.pt"
+    torch.save({k: v for k, v in ckpt.items() if k != "train_config"}, weights)
+    policy = H2INTPolicy(checkpoint=str(weights))
     assert policy.meta["variant"] == "meanpool"
     obs = {"robot": np.zeros((2, 9), np.float32), "humans": np.ones((2, 30, 2), np.float32),
            "mask": np.ones((2, 30), np.float32)}
     assert np.isfinite(policy.act(obs)).all()
-    code = main(["train", "h2int", "--resume", legacy, "--out", str(tmp_path / "r"), "--iterations", "1"])
-    assert code == 2 and "cannot be resumed" in capsys.readouterr().err
+    code = main(["train", "h2int", "--resume", str(weights), "--out", str(tmp_path / "r"), "--iterations", "1"])
+    assert code == 2 and "no training state; it cannot be resumed" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("method", ["h2int", "cadrl", "sarl"])

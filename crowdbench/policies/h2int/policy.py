@@ -20,13 +20,8 @@ METHOD = "h2int"
 
 
 def model_config(ckpt: dict[str, Any]) -> H2INTConfig:
-    """The architecture stored in a checkpoint (current or legacy ``crowdbench.h2int/1`` layout)."""
-    model = dict(ckpt["model"])
-    if "hidden_dims" in model:  # legacy: the actor's keyword arguments
-        model = {"variant": model["variant"], "d_model": model["d_model"], "heads": model["heads"],
-                 "ffn": model["ffn"], "gru_hidden": model["gru_hidden"], "head_dims": tuple(model["hidden_dims"]),
-                 "action_std": model["distribution_cfg"]["init_std"]}
-    return H2INTConfig(**model)
+    """The architecture stored in a checkpoint."""
+    return H2INTConfig(**ckpt["model"])
 
 
 def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[H2INTActor, dict[str, Any]]:
