@@ -43,29 +43,29 @@ def plot_curve(history: dict[str, list], evals: list[dict], path: str, title: st
 
 def plot_evals(history_files: list[str], path: str, bar: float = 0.95) -> None:
     """Quick-evaluation success of several runs against env steps and against wall-clock minutes: one colour per
-    architecture and PPO schedule (epochs × mini-batches), one line style per seed, the bar dotted."""
+    architecture, PPO schedule (epochs × mini-batches, learning rate) and curriculum, one line style per seed, the
+    bar dotted."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     runs = _load_runs(history_files)
-    schedules = sorted({(_architecture(r["config"]), *_schedule(r["config"])) for r in runs},
-                       key=lambda aem: (aem[0], -aem[1], -aem[2]))
+    schedules = sorted({_colour_key(r["config"]) for r in runs}, key=lambda k: (k[0], -k[1], -k[2], *map(str, k[3:])))
     seeds = sorted({r["config"]["seed"] for r in runs})
     colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
     styles = ["-", "--", ":", "-."]
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100)
     for r in runs:
         cfg, evals = r["config"], r["evals"]
-        kw = {"color": colours[schedules.index((_architecture(cfg), *_schedule(cfg))) % len(colours)],
+        kw = {"color": colours[schedules.index(_colour_key(cfg)) % len(colours)],
               "linestyle": styles[seeds.index(cfg["seed"]) % len(styles)], "marker": "o", "markersize": 2.5,
               "label": _run_label(cfg)}
         succ = [e["success_rate"] for e in evals]
         axes[0].plot([e["env_steps"] / 1e6 for e in evals], succ, **kw)
         axes[1].plot([e["time"] / 60 for e in evals], succ, **kw)
     axes[0].set(xlabel="environment steps [M]", ylabel="quick-eval success (N = 20, ρ = 0.5)", ylim=(0, 1.02))
-    axes[1].set(xlabel="wall-clock [min] (2 cores)", ylim=(0, 1.02))
+    axes[1].set(xlabel="wall-clock [min] (each run's own cores)", ylim=(0, 1.02))
     for ax in axes:
         ax.axhline(bar, color="grey", linestyle=":", linewidth=1)
         ax.grid(alpha=0.3)
@@ -90,6 +90,11 @@ def _schedule(cfg: dict[str, Any]) -> tuple[int, int]:
     return cfg.get("epochs", 4), cfg.get("mini_batches", 4)
 
 
+def _colour_key(cfg: dict[str, Any]) -> tuple[Any, ...]:
+    """What one colour stands for: architecture, epochs, mini-batches, learning rate and schedule, curriculum."""
+    return (_architecture(cfg), *_schedule(cfg), cfg.get("learning_rate"), cfg.get("schedule"), cfg.get("anneal", True))
+
+
 def _architecture(cfg: dict[str, Any]) -> str:
     """A saved run's architecture: H²INT's ``variant``, else the method with its named variant
     (:meth:`PPOMethod.label <crowdbench.training.methods.PPOMethod.label>`, e.g. ``dsrnn-small``)."""
@@ -110,8 +115,9 @@ def _architecture(cfg: dict[str, Any]) -> str:
 def _run_label(cfg: dict[str, Any]) -> str:
     epochs, mini_batches = _schedule(cfg)
     name = _architecture(cfg)
-    return (f"{name} {epochs}×{mini_batches} seed {cfg['seed']}"
-            f"{'' if cfg.get('anneal', True) else ' (no annealing, ρ = 0)'}")
+    lr = (f" lr {cfg['learning_rate']:g} {cfg.get('schedule', 'adaptive')}" if "learning_rate" in cfg else "")
+    return (f"{name} {epochs}×{mini_batches}{lr} seed {cfg['seed']}"
+            f"{' (ρ annealed)' if cfg.get('anneal', True) else ' (no annealing, ρ = 0)'}")
 
 
 def runs_table(history_files: list[str], bar: float = 0.95) -> str:

@@ -144,7 +144,7 @@ def test_runs_table_reports_when_the_bar_was_first_reached(runs):
     histories = [str(root / "straight" / "history.json"), str(root / "split" / "history.json")]
     always = runs_table(histories, bar=0.0).splitlines()
     assert len(always) == 4 and all("iteration 2 |" in row for row in always[2:])  # first evaluation: iteration 2
-    assert "1×2 seed 0" in always[2]  # schedule (epochs × mini-batches) and seed label each run
+    assert "1×2 lr 0.0003 adaptive seed 0 (ρ annealed)" in always[2]  # schedule, learning rate, seed, curriculum
     never = runs_table(histories, bar=1.01).splitlines()
     assert all("not reached" in row for row in never[2:])
 
@@ -157,7 +157,7 @@ def test_curves_command_plots_and_tabulates_runs(runs, tmp_path, capsys):
         assert main(["curves", *histories, "--out", str(out), "--table", "0.0", *flag]) == 0
         assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     printed = capsys.readouterr().out
-    assert printed.count("| h2int 1×2 seed 0 | iteration 2 |") == 4  # two runs, printed once per figure
+    assert printed.count("| h2int 1×2 lr 0.0003 adaptive seed 0 (ρ annealed) | iteration 2 |") == 4  # two runs, twice
 
 
 def test_old_format_checkpoints_are_refused_and_weights_only_files_do_not_resume(tmp_path, capsys):
