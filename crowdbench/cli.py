@@ -243,7 +243,10 @@ def curves_cmd(args: argparse.Namespace) -> int:
     """Compare training runs (history.json files) on one figure."""
     from crowdbench.training.plots import plot_evals, plot_runs, runs_table
 
-    (plot_evals if args.evals else plot_runs)(args.histories, args.out)
+    if args.evals:  # the bar line at --table's bar when one is given
+        plot_evals(args.histories, args.out, *([] if args.table is None else [args.table]))
+    else:
+        plot_runs(args.histories, args.out)
     print(f"wrote {args.out}")
     if args.table is not None:
         print(runs_table(args.histories, args.table))
@@ -493,7 +496,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--evals", action="store_true",
                    help="plot quick-eval success against env steps and minutes (default: training success, reward)")
     p.add_argument("--table", type=float, default=None, metavar="BAR",
-                   help="also print a markdown table: when each run's quick evaluation first reached BAR (e.g. 0.95)")
+                   help="also print a markdown table: when each run's quick evaluation first reached BAR (e.g. 0.95); "
+                        "with --evals the figure's bar line is drawn there too (default 0.95)")
     p.set_defaults(func=curves_cmd)
     p = sub.add_parser("panels", help="trajectory panels of one episode per layout (the paper's Fig. 4)")
     p.add_argument("policy_pos", nargs="?", default=None, metavar="POLICY")
