@@ -31,16 +31,18 @@ def main(a: str, b: str) -> int:
     a_dir, b_dir = Path(a), Path(b)
     files = sorted({p.relative_to(b_dir) for p in b_dir.rglob("*.json")} & {p.relative_to(a_dir)
                                                                             for p in a_dir.rglob("*.json")})
-    bad = [f.as_posix() for f in files
-           if strip(json.loads((a_dir / f).read_text())) != strip(json.loads((b_dir / f).read_text()))]
+    bad: list[tuple[str, str]] = []  # (file, where the two copies were made)
+    for f in files:
+        a_doc, b_doc = (json.loads((d / f).read_text()) for d in (a_dir, b_dir))
+        if strip(a_doc) != strip(b_doc):
+            cpus = [doc.get("cpu", "unrecorded") for doc in (a_doc, b_doc)]
+            where = ("" if f.parts[0] != "cells" else f" (same CPU: {cpus[0]})" if cpus[0] == cpus[1]
+                     else f" (CPUs {cpus[0]} → {cpus[1]})")
+            bad.append((f.as_posix(), where))
     if (a_dir / "LEADERBOARD.md").read_text() != (b_dir / "LEADERBOARD.md").read_text():
-        bad.append("LEADERBOARD.md")
+        bad.append(("LEADERBOARD.md", ""))
     print(f"compared {len(files)} JSON files and LEADERBOARD.md: {'identical' if not bad else 'DIFFERENT'}")
-    for f in bad:
-        cpus = [json.loads((d / f).read_text()).get("cpu", "unrecorded") if f.startswith("cells") else None
-                for d in (a_dir, b_dir)]
-        where = "" if cpus[0] is None else (f" (same CPU: {cpus[0]})" if cpus[0] == cpus[1]
-                                             else f" (CPUs {cpus[0]} → {cpus[1]})")
+    for f, where in bad:
         print(f"  differs: {f}{where}")
     return 1 if bad else 0
 

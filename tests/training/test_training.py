@@ -276,9 +276,8 @@ def test_reward_scale_option_sets_new_runs_and_is_refused_on_resume(capsys, monk
     assert "--reward-scale: options of the PPO methods" in capsys.readouterr().err
 
 
-def test_anneal_option_overrides_the_methods_curriculum_default(capsys, monkeypatch):
-    """DS-RNN trains at ρ = 0 by default (the originals' invisible robot); `--anneal` gives it H²INT's curriculum,
-    `--no-anneal` takes H²INT's away, nothing keeps each method's own; resumed runs and value methods refuse both."""
+def configs_of_new_runs(monkeypatch, argvs: list[list[str]]) -> list:
+    """The TrainConfig `crowdbench train ARGV --out runs/never` builds for each of ``argvs`` (training replaced)."""
     import crowdbench.training.trainer as trainer_mod
 
     seen = []
@@ -288,9 +287,16 @@ def test_anneal_option_overrides_the_methods_curriculum_default(capsys, monkeypa
         raise SystemExit(0)
 
     monkeypatch.setattr(trainer_mod, "train", fake_train)
-    for argv in (["dsrnn"], ["dsrnn", "--anneal"], ["h2int"], ["h2int", "--no-anneal"]):
+    for argv in argvs:
         with pytest.raises(SystemExit):
             main(["train", *argv, "--out", "runs/never"])
+    return seen
+
+
+def test_anneal_option_overrides_the_methods_curriculum_default(capsys, monkeypatch):
+    """DS-RNN trains at ρ = 0 by default (the originals' invisible robot); `--anneal` gives it H²INT's curriculum,
+    `--no-anneal` takes H²INT's away, nothing keeps each method's own; resumed runs and value methods refuse both."""
+    seen = configs_of_new_runs(monkeypatch, [["dsrnn"], ["dsrnn", "--anneal"], ["h2int"], ["h2int", "--no-anneal"]])
     assert [c.anneal for c in seen] == [False, True, True, False]
     assert seen[1].rho_init == 0.8 and seen[1].learning_rate == 4e-5  # the curriculum, DS-RNN's own PPO recipe
     assert main(["train", "dsrnn", "--resume", "runs/x", "--anneal"]) == 2
@@ -300,18 +306,7 @@ def test_anneal_option_overrides_the_methods_curriculum_default(capsys, monkeypa
 
 
 def test_learning_rate_options_override_the_methods_recipe_on_new_runs_only(capsys, monkeypatch):
-    import crowdbench.training.trainer as trainer_mod
-
-    seen = []
-
-    def fake_train(cfg, out, resume=None):
-        seen.append(cfg)
-        raise SystemExit(0)
-
-    monkeypatch.setattr(trainer_mod, "train", fake_train)
-    for argv in (["dsrnn"], ["dsrnn", "--learning-rate", "3e-4", "--schedule", "adaptive"]):
-        with pytest.raises(SystemExit):
-            main(["train", *argv, "--out", "runs/never"])
+    seen = configs_of_new_runs(monkeypatch, [["dsrnn"], ["dsrnn", "--learning-rate", "3e-4", "--schedule", "adaptive"]])
     assert [(c.learning_rate, c.schedule) for c in seen] == [(4e-5, "fixed"), (3e-4, "adaptive")]
     assert main(["train", "dsrnn", "--resume", "runs/x", "--learning-rate", "1e-3"]) == 2
     assert "--learning-rate: a resumed run keeps its configuration" in capsys.readouterr().err
