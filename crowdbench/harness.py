@@ -314,7 +314,8 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
     everyone, groups, planners = gather(out, suite, board, {e.label: e.group for e in entries},
                                         {e.label: fps[e.label] for e in entries})
     write_text(os.path.join(out, "LEADERBOARD.md"),
-               leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name))
+               leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name,
+                                    planners=planners))
     if {"I", "II"} & set(suite.tables):
         plot_board(everyone, os.path.join(out, "success.png"), groups, planners=planners)
         if "ablation" in groups.values():

@@ -378,10 +378,11 @@ def _clear_best(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
 
 def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[str, str] | None = None,
                          episodes: int | None = None, seed: int | None = None,
-                         reference: str | None = "h2int", suite: str | None = None) -> str:
+                         reference: str | None = "h2int", suite: str | None = None,
+                         planners: frozenset[str] = frozenset()) -> str:
     """The paper's tables with one row per method: success / collision / timeout [%], navigation time [s] per
     setting; the best success of each setting in bold. Ablation entries get their own tables, headed by the
-    ``reference`` method's row when it is on the board."""
+    ``reference`` method's row when it is on the board. ``planners`` (labels with no checkpoint) get no seed count."""
     groups = groups or {}
     out = ["# crowdbench leaderboard", ""]
     if episodes is not None:
@@ -449,7 +450,7 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
         if group == "main":
             families = {lb: [lb, *(x for x in board if groups.get(x, "main").startswith("seeds")
                                    and family(groups[x]) == lb)] for lb in labels}
-            out += _over_seeds(board, families)
+            out += _over_seeds(board, families, planners)
     return "\n".join(out)
 
 
@@ -462,9 +463,11 @@ def _mean_spread(board: dict[str, list[dict[str, Any]]], labels: list[str], tabl
     return f"{vals[0]:.1f}" if len(vals) == 1 else f"{sum(vals) / len(vals):.1f} [{max(vals) - min(vals):.1f}]"
 
 
-def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list[str]]) -> list[str]:
+def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list[str]],
+                planners: frozenset[str] = frozenset()) -> list[str]:
     """The main methods' headline settings (Tables I, II and III pooled) as mean success [spread] over each method's
-    training seeds (``families``: main label → its seed labels, itself first); nothing when no method has several."""
+    training seeds (``families``: main label → its seed labels, itself first); nothing when no method has several.
+    The seed count is "—" for ``planners`` (nothing trained)."""
     if all(len(f) < 2 for f in families.values()):
         return []
     settings = sorted(dict.fromkeys((r["table"], r["row"]) for lb in families for r in board[lb]
@@ -478,5 +481,5 @@ def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list
            "|---|---|" + "---|" * len(settings)]
     for lb, fam in families.items():
         cells_ = [_mean_spread(board, fam, t, row) for t, row in settings]
-        out.append(f"| {lb} | {len(fam) if len(fam) > 1 else '—'} | " + " | ".join(cells_) + " |")
+        out.append(f"| {lb} | {'—' if lb in planners else len(fam)} | " + " | ".join(cells_) + " |")
     return [*out, ""]

@@ -125,13 +125,15 @@ def test_the_main_section_gives_every_method_over_its_seeds():
                  "timeout_rate": 1.0, "nav_time": 10.0}]
 
     board = {"orca": rows(0.9, 0.7), "cadrl": rows(0.7, 0.3), "cadrl-seed1": rows(0.9, 0.4),
-             "cadrl-seed2": rows(0.8, 0.5), "h2int": rows(0.95, 0.9), "h2int-seed1": rows(0.85, 0.8)}
+             "cadrl-seed2": rows(0.8, 0.5), "h2int": rows(0.95, 0.9), "h2int-seed1": rows(0.85, 0.8),
+             "dsrnn": rows(0.5, 0.2)}
     groups = {"orca": "main", "cadrl": "main", "h2int": "main", "cadrl-seed1": "seeds:cadrl",
-              "cadrl-seed2": "seeds:cadrl", "h2int-seed1": "seeds"}
-    md = leaderboard.leaderboard_markdown(board, groups)
+              "cadrl-seed2": "seeds:cadrl", "h2int-seed1": "seeds", "dsrnn": "main"}
+    md = leaderboard.leaderboard_markdown(board, groups, planners=frozenset({"orca"}))
     section = md.split("### Every method over its training seeds")[1].split("##")[0]
     assert "| method | seeds | Table I High | Table III pooled High |" in section  # per-layout cells left out
-    assert "| orca | — | 90.0 | 70.0 |" in section  # one row: its own value
+    assert "| orca | — | 90.0 | 70.0 |" in section  # one row: its own value; a planner has no seeds
+    assert "| dsrnn | 1 | 50.0 | 20.0 |" in section  # one training seed, said as such
     assert "| cadrl | 3 | 80.0 [20.0] | 40.0 [20.0] |" in section
     assert "| h2int | 2 | 90.0 [10.0] | 85.0 [10.0] |" in section  # plain "seeds" group = the reference's
 
