@@ -116,19 +116,11 @@ def test_named_widths_of_the_recurrent_baselines():
     assert PPO_METHODS.get("h2int")().variant_model("flat") == {"variant": "flat"}
 
 
-def test_shipped_checkpoint_loads_safely_and_navigates_a_crowd_better_than_driving_straight():
+def test_shipped_checkpoint_loads_safely_and_navigates_a_crowd_better_than_driving_straight(shipped_against_straight):
     """The shipped ``aig_gst`` (the `small` widths, seed 0, package data) loads with ``weights_only=True`` and, on
     the same 24 seeded crossings among 10 pedestrians (ρ = 0.5), reaches the goal far more often than the robot that
     drives straight at it."""
-    from crowdbench import checkpoints
-    from crowdbench.evaluation import run_episodes, summarize
-    from crowdbench.policies import make_policy
-
-    assert "aig_gst" in checkpoints.shipped_names("aig_gst")
-    ckpt = checkpoints.load(checkpoints.shipped("aig_gst", "aig_gst"), "aig_gst")
+    ckpt, aig, straight = shipped_against_straight("aig_gst", humans=10, episodes=24)
     assert ckpt["seed"] == 0 and ckpt["model"]["robot_embed"] == 64  # the `small` widths
-    kw = {"num_humans": 10, "human_model_kwargs": {"responsiveness": 0.5}, "seed": 0, "num_worlds": 12}
-    aig = summarize(run_episodes(make_policy("aig_gst"), 24, **kw))
-    straight = summarize(run_episodes(make_policy("linear"), 24, **kw))
     # measured: 1.0 against 0.625
     assert aig["success_rate"] >= 0.9 and aig["success_rate"] >= straight["success_rate"] + 0.25, (aig, straight)

@@ -171,19 +171,11 @@ def test_trains_checkpoints_resumes_and_drives_a_robot(tmp_path):
     assert len(episodes) == 4 and all(e.outcome in ("success", "collision", "timeout") for e in episodes)
 
 
-def test_shipped_checkpoint_loads_safely_and_navigates_a_crowd_better_than_driving_straight():
+def test_shipped_checkpoint_loads_safely_and_navigates_a_crowd_better_than_driving_straight(shipped_against_straight):
     """The shipped ``dsrnn`` (the `small` widths, seed 0, 10 M env steps with H²INT's PPO schedule; package data)
     loads with ``weights_only=True`` and, on the same 48 seeded crossings among 20 pedestrians (ρ = 0.5, the bar cell),
     reaches the goal clearly more often than the robot that drives straight at it."""
-    from crowdbench import checkpoints
-    from crowdbench.evaluation import run_episodes, summarize
-    from crowdbench.policies import make_policy
-
-    assert "dsrnn" in checkpoints.shipped_names("dsrnn")
-    ckpt = checkpoints.load(checkpoints.shipped("dsrnn", "dsrnn"), "dsrnn")
+    ckpt, dsrnn, straight = shipped_against_straight("dsrnn", humans=20, episodes=48)
     assert ckpt["seed"] == 0 and ckpt["model"]["edge_rnn"] == 64  # the `small` widths
-    kw = {"num_humans": 20, "human_model_kwargs": {"responsiveness": 0.5}, "seed": 0, "num_worlds": 24}
-    dsrnn = summarize(run_episodes(make_policy("dsrnn"), 48, **kw))
-    straight = summarize(run_episodes(make_policy("linear"), 48, **kw))
     # measured: 0.5625 against 0.333 (27 against 16 of 48)
     assert dsrnn["success_rate"] >= straight["success_rate"] + 0.15, (dsrnn, straight)
