@@ -252,30 +252,6 @@ def test_model_overrides_parse_by_field_type_and_reject_bad_input(capsys):
     assert "keeps its architecture" in capsys.readouterr().err
 
 
-def test_reward_scale_option_sets_new_runs_and_is_refused_on_resume(capsys, monkeypatch):
-    """`--reward-scale` reaches a new run's TrainConfig; a resumed run keeps its configuration, so it and the other
-    schedule options get one clear error there naming what may change."""
-    import crowdbench.training.trainer as trainer_mod
-
-    seen = {}
-
-    def fake_train(cfg, out, resume=None):
-        seen["cfg"] = cfg
-        raise SystemExit(0)
-
-    monkeypatch.setattr(trainer_mod, "train", fake_train)
-    with pytest.raises(SystemExit):
-        main(["train", "dsrnn", "--variant", "small", "--reward-scale", "1.0", "--out", "runs/never"])
-    assert seen["cfg"].reward_scale == 1.0 and seen["cfg"].method == "dsrnn"
-    assert main(["train", "h2int", "--reward-scale", "0"]) == 2
-    assert "reward_scale=0.0; valid choices: a positive number" in capsys.readouterr().err
-    assert main(["train", "h2int", "--resume", "runs/x", "--reward-scale", "1", "--epochs", "2"]) == 2
-    err = capsys.readouterr().err
-    assert "--epochs, --reward-scale: a resumed run keeps its configuration" in err and "--minutes" in err
-    assert main(["train", "sarl", "--reward-scale", "1"]) == 2
-    assert "--reward-scale: options of the PPO methods" in capsys.readouterr().err
-
-
 def configs_of_new_runs(monkeypatch, argvs: list[list[str]]) -> list:
     """The TrainConfig `crowdbench train ARGV --out runs/never` builds for each of ``argvs`` (training replaced)."""
     import crowdbench.training.trainer as trainer_mod
@@ -291,6 +267,20 @@ def configs_of_new_runs(monkeypatch, argvs: list[list[str]]) -> list:
         with pytest.raises(SystemExit):
             main(["train", *argv, "--out", "runs/never"])
     return seen
+
+
+def test_reward_scale_option_sets_new_runs_and_is_refused_on_resume(capsys, monkeypatch):
+    """`--reward-scale` reaches a new run's TrainConfig; a resumed run keeps its configuration, so it and the other
+    schedule options get one clear error there naming what may change."""
+    (cfg,) = configs_of_new_runs(monkeypatch, [["dsrnn", "--variant", "small", "--reward-scale", "1.0"]])
+    assert cfg.reward_scale == 1.0 and cfg.method == "dsrnn"
+    assert main(["train", "h2int", "--reward-scale", "0"]) == 2
+    assert "reward_scale=0.0; valid choices: a positive number" in capsys.readouterr().err
+    assert main(["train", "h2int", "--resume", "runs/x", "--reward-scale", "1", "--epochs", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--epochs, --reward-scale: a resumed run keeps its configuration" in err and "--minutes" in err
+    assert main(["train", "sarl", "--reward-scale", "1"]) == 2
+    assert "--reward-scale: options of the PPO methods" in capsys.readouterr().err
 
 
 def test_anneal_option_overrides_the_methods_curriculum_default(capsys, monkeypatch):
