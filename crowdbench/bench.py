@@ -12,7 +12,8 @@ Figures (medians of repeated runs, with the spread = max − min):
 * ``train_steps_per_s`` — H²INT PPO training end to end (rollout + update), default configuration (both cores:
   two world processes that act and step, two threads in the update), 10 iterations from scratch after 2 warm-up
   iterations, evaluations off; ``train_steps_per_s_1_core`` — the same pinned to one core (one process, one thread);
-  ``train_steps_per_s_by_method`` — the same for DS-RNN and AIG-GST with their own recipes, 3 iterations;
+  ``train_steps_per_s_by_method`` — the same for DS-RNN and AIG-GST with their own recipes at the original widths
+  (``--variant original``; their ``small`` default trains 3–7× faster, README), 3 iterations;
 * ``h2int_inference_ms`` — one decision for one robot (encoder + GRU + head), CPU, one thread;
 * ``decision_ms[policy]`` — one decision of *every registered robot policy* in a 20-pedestrian crossing (policies
   registered later, e.g. look-ahead baselines, get their figure automatically).
@@ -178,20 +179,22 @@ def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> dic
     return _stats(samples)
 
 
-def train_steps_per_s(iterations: int, repeats: int, threads: int = 2,
-                      env_processes: int = 2, method: str = "h2int") -> dict[str, float]:
+def train_steps_per_s(iterations: int, repeats: int, threads: int = 2, env_processes: int = 2,
+                      method: str = "h2int", variant: str | None = None) -> dict[str, float]:
     """Env steps per second of ``crowdbench train METHOD``'s loop (rollout + PPO update, evaluations off), the
-    method's default configuration apart from the speed settings given."""
+    method's recipe and ``variant`` (``None``: its default) apart from the speed settings given."""
     import tempfile
 
     from crowdbench.training.config import TrainConfig
+    from crowdbench.training.methods import PPO_METHODS
     from crowdbench.training.trainer import Trainer
 
     samples = []
     for r in range(repeats):
         with tempfile.TemporaryDirectory() as tmp:
-            cfg = TrainConfig.for_method(method, iterations=iterations + 2, eval_every=0, checkpoint_every=10**6,
-                                         seed=r, threads=threads, env_processes=env_processes)
+            model = PPO_METHODS.get(method)().variant_model(variant)
+            cfg = TrainConfig.for_method(method, model=model, iterations=iterations + 2, eval_every=0,
+                                         checkpoint_every=10**6, seed=r, threads=threads, env_processes=env_processes)
             tr = Trainer(cfg, tmp, quiet=True)
             try:
                 tr.train(stop_at=2)  # warm-up (numba compilation, allocator)
@@ -323,7 +326,8 @@ def run(quick: bool = False) -> dict[str, Any]:
     res["train_steps_per_s_by_method"] = {}
     for method in ("dsrnn", "aig_gst"):  # the recurrent baselines' own recipes (192 worlds × 30 steps per iteration)
         try:
-            res["train_steps_per_s_by_method"][method] = train_steps_per_s(1 if quick else 3, 1, method=method)
+            res["train_steps_per_s_by_method"][method] = train_steps_per_s(1 if quick else 3, 1, method=method,
+                                                                               variant="original")
         except Exception as e:  # noqa: BLE001 - reported (e.g. no shipped predictor yet), the rest still runs
             res["train_steps_per_s_by_method"][method] = {"skipped": f"{type(e).__name__}: {e}"}
     return res
@@ -353,7 +357,7 @@ def results_markdown(res: dict[str, Any]) -> str:
                      f"{s['spread']:,.0f} |")
     for method, s in res.get("train_steps_per_s_by_method", {}).items():
         figure = f"{s['median']:,.0f} | {s['spread']:,.0f}" if "median" in s else f"skipped: {s['skipped']} |"
-        lines.append(f"| train_steps_per_s ({method}, its recipe, 2 cores) | 10–30 | 192 | {figure} |")
+        lines.append(f"| train_steps_per_s ({method}, original widths, its recipe, 2 cores) | 10–30 | 192 | {figure} |")
     s = res["h2int_inference_ms"]
     lines.append(f"| h2int_inference_ms | 12 seen | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
     by_cores = dict(res.get("decision_ms_all_cores", {}))

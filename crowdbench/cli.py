@@ -142,9 +142,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         cfg = resume_config(path, **speed)
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
-        model = method.variant_model(args.variant) if args.variant is not None else None
-        if args.model:
-            model = {**(model or {}), **method.model_overrides(args.model)}
+        model = {**method.variant_model(args.variant), **method.model_overrides(args.model or [])}
         overrides = {"model": model, "seed": args.seed, **speed}
         if args.anneal is not None:
             overrides["anneal"] = args.anneal
@@ -403,7 +401,8 @@ def main(argv: list[str] | None = None) -> int:
     p = sub.add_parser("train", help="train a learned policy: H²INT (rsl-rl PPO), CADRL or SARL (value learning)")
     p.add_argument("algo", metavar="METHOD", help="h2int (or another registered PPO method), cadrl or sarl")
     p.add_argument("--variant", default=None, help="architecture: h2int: h2int (default), flat, meanpool or standard; "
-                        "dsrnn, aig_gst: original (default) or small")
+                        "dsrnn: small (default), original or small_nearest; aig_gst: small (default) "
+                        "or original")
     p.add_argument("--model", action="append", default=None, metavar="FIELD=VALUE",
                    help="architecture field over the variant's (repeatable), e.g. --model d_model=64 --model "
                         "gru_hidden=128; the fields are the method's config (H2INTConfig, ...)")

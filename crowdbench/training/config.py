@@ -17,8 +17,9 @@ class TrainConfig:
     method: str = "h2int"
     """Registered PPO method (:data:`~crowdbench.training.methods.PPO_METHODS`)."""
     model: Any = None
-    """The method's architecture config (its ``model_config`` dataclass, or a dict of its fields); default: the
-    method's defaults."""
+    """The method's architecture config (its ``model_config`` dataclass, or a dict of its fields over that
+    dataclass's defaults); default (``None``): the method's :attr:`default_variant
+    <crowdbench.training.methods.PPOMethod.default_variant>` (DS-RNN and AIG-GST: ``small``)."""
     seed: int = 0
     """Seeds the networks' initialisation, the policy noise and every world's episode-seed stream."""
     num_envs: int = 256
@@ -91,7 +92,7 @@ class TrainConfig:
         method = PPO_METHODS.get(self.method)  # unknown method: one error naming the valid ones
         model = self.model
         if model is None:
-            model = method.model_config()
+            model = method.model_config(**method().variant_model(None))
         elif isinstance(model, dict):
             model = _strict(method.model_config, model, "model")
         elif not isinstance(model, method.model_config):

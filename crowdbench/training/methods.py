@@ -43,8 +43,14 @@ class PPOMethod(ABC):
     """Named architectures as :attr:`model_config` field overrides (``crowdbench train METHOD --variant NAME``); a
     method without any takes ``--variant`` as its config's own ``variant`` field (H²INT's ablations)."""
 
-    def variant_model(self, name: str) -> dict[str, Any]:
-        """The ``model`` fields of variant ``name``."""
+    default_variant: ClassVar[str | None] = None
+    """The variant a run gets when it names none (``TrainConfig(model=None)``, ``crowdbench train`` without
+    ``--variant``); ``None``: :attr:`model_config`'s own defaults."""
+
+    def variant_model(self, name: str | None) -> dict[str, Any]:
+        """The ``model`` fields of variant ``name`` (``None``: of :attr:`default_variant`)."""
+        if name is None:
+            return {} if self.default_variant is None else self.variant_model(self.default_variant)
         if not self.variants:
             return {"variant": name}
         if name not in self.variants:

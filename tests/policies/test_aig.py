@@ -101,6 +101,7 @@ def test_trains_with_the_intrusion_penalty_and_drives_a_robot(tmp_path):
 def test_named_widths_of_the_recurrent_baselines():
     import pytest
 
+    from crowdbench.policies.dsrnn.training import SMALL
     from crowdbench.training.config import TrainConfig
     from crowdbench.training.methods import PPO_METHODS
 
@@ -111,6 +112,11 @@ def test_named_widths_of_the_recurrent_baselines():
     assert actor.self_attn.embed_dim == 128 and sum(p.numel() for p in actor.parameters()) < 250_000
     dsrnn = PPO_METHODS.get("dsrnn")()
     assert dsrnn.label(TrainConfig.for_method("dsrnn", model=dsrnn.variant_model("small")).model) == "dsrnn-small"
+    # the default is `small` (the original widths cannot plateau here), the original's widths stay one name away
+    assert TrainConfig.for_method("dsrnn").model == TrainConfig.for_method("dsrnn", model=SMALL).model
+    assert TrainConfig.for_method("aig_gst").model == small and dsrnn.variant_model(None) == SMALL
+    assert TrainConfig.for_method("aig_gst", model=aig.variant_model("original")).model == AIGConfig()
+    assert PPO_METHODS.get("h2int")().variant_model(None) == {}
     with pytest.raises(ValueError, match="valid choices: original, small"):
         aig.variant_model("huge")
     assert PPO_METHODS.get("h2int")().variant_model("flat") == {"variant": "flat"}

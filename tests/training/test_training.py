@@ -300,3 +300,17 @@ def test_learning_rate_options_override_the_methods_recipe_on_new_runs_only(caps
     assert [(c.learning_rate, c.schedule) for c in seen] == [(4e-5, "fixed"), (3e-4, "adaptive")]
     assert main(["train", "dsrnn", "--resume", "runs/x", "--learning-rate", "1e-3"]) == 2
     assert "--learning-rate: a resumed run keeps its configuration" in capsys.readouterr().err
+
+
+def test_recurrent_baselines_train_their_small_widths_unless_told_otherwise(monkeypatch):
+    """`crowdbench train dsrnn|aig_gst` builds the `small` widths (the shipped ones); `--variant original` the
+    original's, and `--model` refines whichever variant is named (or the default)."""
+    from crowdbench.policies.aig.model import AIGConfig
+    from crowdbench.policies.dsrnn.model import DSRNNConfig
+
+    seen = configs_of_new_runs(monkeypatch, [["dsrnn"], ["dsrnn", "--variant", "original"], ["aig_gst"],
+                                             ["dsrnn", "--model", "latent=32"], ["h2int"]])
+    assert seen[0].model.edge_rnn == 64 and seen[1].model == DSRNNConfig() and seen[1].model.edge_rnn == 256
+    assert seen[2].model.robot_embed == 64 and AIGConfig().robot_embed == 256
+    assert seen[3].model.latent == 32 and seen[3].model.edge_rnn == 64
+    assert seen[4].model.variant == "h2int"
