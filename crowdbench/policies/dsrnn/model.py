@@ -66,7 +66,10 @@ class DSRNNConfig:
     head_dims: tuple[int, ...] = (256, 256)
     """Hidden widths of the actor and critic heads (tanh) [-]."""
     action_std: float = 1.0
-    """Initial standard deviation of the Gaussian policy (learned, state-independent; log-std 0) [m/s]."""
+    """Initial standard deviation of the Gaussian policy (state-independent; log-std 0) [m/s]."""
+    learn_std: bool = True
+    """Whether PPO learns the standard deviation (the original) or keeps it at :attr:`action_std` (H²INT's fixed
+    covariance: ``--model learn_std=false --model action_std=0.3``)."""
     slots: str = "by_id"
     """What a spatial-edge slot holds. ``by_id``: pedestrian j (the ``relative_by_id`` observation), stepped only
     while in view, unseen slots masked out of the attention (CrowdNav_DSRNN's one state per person).
@@ -86,7 +89,7 @@ class DSRNNConfig:
         """Keyword arguments of :class:`DSRNNActor` (and rsl-rl's ``actor`` config)."""
         return {"config": self, "hidden_dims": list(self.head_dims), "activation": "tanh",
                 "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": self.action_std,
-                                     "learn_std": True}}
+                                     "learn_std": self.learn_std}}
 
 
 class DSRNNCore(nn.Module):
