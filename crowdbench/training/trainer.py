@@ -32,7 +32,7 @@ from crowdbench.training.malloc import keep_heap
 from crowdbench.training.methods import PPO_METHODS, PPOMethod
 from crowdbench.training.models import SharedTrunkCritic
 from crowdbench.training.plots import plot_curve
-from crowdbench.training.ppo import SharedTrunkPPO
+from crowdbench.training.ppo import SharedTrunkPPO, gaussian_std
 from crowdbench.training.rollout import PolicySnapshot, collect, snapshot_builder
 from crowdbench.training.vecenv import CrowdVecEnv
 
@@ -80,7 +80,8 @@ class Trainer:
         self.env_steps = 0
         self.elapsed = 0.0
         self.history: dict[str, list] = {k: [] for k in ("iteration", "env_steps", "time", "rho", "train_success",
-                                                         "train_collision", "mean_reward", "steps_per_s")}
+                                                         "train_collision", "mean_reward", "steps_per_s",
+                                                         "action_std")}
         self.evals: list[dict[str, Any]] = []
         self.writer = None
 
@@ -120,6 +121,7 @@ class Trainer:
         torch.set_rng_state(ckpt["torch_rng"])
         self.iteration, self.env_steps, self.elapsed = ckpt["iteration"], ckpt["env_steps"], ckpt["elapsed_s"]
         self.history, self.evals = ckpt["history"], ckpt["evals"]
+        self.history.setdefault("action_std", [None] * len(self.history["iteration"]))  # runs saved before it
         self._restart_episodes()
 
     def _restart_episodes(self) -> None:
@@ -173,7 +175,7 @@ class Trainer:
             row = {"iteration": self.iteration, "env_steps": self.env_steps, "time": self.elapsed,
                    "rho": env.curriculum.rho, "train_success": log["Crowd/success_rate"],
                    "train_collision": log["Crowd/collision_rate"], "mean_reward": float(np.mean(rewards)),
-                   "steps_per_s": n / (t2 - t0)}
+                   "steps_per_s": n / (t2 - t0), "action_std": float(gaussian_std(alg.actor.distribution).mean())}
             for k, v in row.items():
                 self.history[k].append(v)
             for k, v in log.items():

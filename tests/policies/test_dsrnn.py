@@ -4,6 +4,7 @@ drives a robot through crowdbench's PPO path."""
 
 from __future__ import annotations
 
+import pytest
 import torch
 from rsl_rl.utils import split_and_pad_trajectories
 from tensordict import TensorDict
@@ -194,7 +195,8 @@ def test_learn_std_false_keeps_the_policy_noise_fixed_through_training(tmp_path)
                                      env_processes=1, eval_every=0, humans_range=(2, 4), learning_rate=1e-2)
         tr = train(cfg, str(tmp_path / str(learn)), quiet=True)
         ckpt = torch.load(tmp_path / str(learn) / "last.pt", weights_only=True)
-        assert tr.iteration == 2
+        assert tr.iteration == 2 and len(tr.history["action_std"]) == 2  # the history records the noise
         stds.append(ckpt["actor"]["distribution.std_param"])
-    assert torch.equal(stds[0], torch.full((2,), 0.3))
+    assert torch.equal(stds[0], torch.full((2,), 0.3)) and tr.history["action_std"][-1] == pytest.approx(
+        stds[1].mean().item())
     assert not torch.allclose(stds[1], torch.ones(2))

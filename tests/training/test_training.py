@@ -48,6 +48,18 @@ def test_resume_continues_exactly(runs):
     assert straight.env.curriculum.state_dict() == resumed.env.curriculum.state_dict()
 
 
+def test_runs_saved_before_the_noise_column_resume_with_it_filled_from_there_on(runs, tmp_path):
+    """A checkpoint whose history has no ``action_std`` (older runs, e.g. the in-progress states) resumes: the
+    column gets ``None`` for its past iterations and the fixed std (0.3) from there on."""
+    root, _, _ = runs
+    ckpt = torch.load(root / "split" / "last.pt", weights_only=True)
+    assert ckpt["history"]["action_std"] == [pytest.approx(0.3)] * 4
+    del ckpt["history"]["action_std"]
+    torch.save(ckpt, tmp_path / "old.pt")
+    resumed = train(tiny(iterations=5), str(tmp_path / "run"), resume=str(tmp_path / "old.pt"), quiet=True)
+    assert resumed.history["action_std"] == [None] * 4 + [pytest.approx(0.3)]
+
+
 def test_checkpoint_loads_weights_only_and_has_artifacts(runs):
     root, _, _ = runs
     ckpt = load_checkpoint(root / "straight" / "last.pt")  # weights_only=True inside
