@@ -447,10 +447,10 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                 stats = [_mean_spread(board, labels, table, s_) for s_ in settings]
                 out.append(f"| mean [spread], {len(labels)} seeds | " + " | ".join(stats) + " |")
             out.append("")
-        if group == "main":
+        if group in ("main", "ablation"):
             families = {lb: [lb, *(x for x in board if groups.get(x, "main").startswith("seeds")
                                    and family(groups[x]) == lb)] for lb in labels}
-            out += _over_seeds(board, families, planners)
+            out += _over_seeds(board, families, planners, ablations=group == "ablation")
     return "\n".join(out)
 
 
@@ -464,19 +464,24 @@ def _mean_spread(board: dict[str, list[dict[str, Any]]], labels: list[str], tabl
 
 
 def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list[str]],
-                planners: frozenset[str] = frozenset()) -> list[str]:
-    """The main methods' headline settings (Tables I, II and III pooled) as mean success [spread] over each method's
-    training seeds (``families``: main label → its seed labels, itself first); nothing when no method has several.
-    The seed count is "—" for ``planners`` (nothing trained)."""
+                planners: frozenset[str] = frozenset(), ablations: bool = False) -> list[str]:
+    """The main methods' (or, with ``ablations``, the reference's and its ablations') headline settings (Tables I,
+    II and III pooled) as mean success [spread] over each method's training seeds (``families``: main label → its
+    seed labels, itself first); nothing when no method has several. The seed count is "—" for ``planners``
+    (nothing trained)."""
     if all(len(f) < 2 for f in families.values()):
         return []
     settings = sorted(dict.fromkeys((r["table"], r["row"]) for lb in families for r in board[lb]
                                     if r["table"] != "III" or r["row"].startswith("pooled")),
                       key=lambda s: ("I", "II", "III").index(s[0]))  # stable: each table's settings in board order
-    out = ["### Every method over its training seeds", "",
-           "Mean success [%] over every shipped training seed of a method and, in brackets, its spread (max − min); "
-           "a method with one row (one training seed, or a planner that is not trained) shows that row's value. "
-           "The tables above show each learned method's default checkpoint; its seeds have their own tables below.",
+    intro = ("The paper's ablation question over training seeds: mean success [%] of the reference and each "
+             "ablation over its shipped training seeds and, in brackets, the spread (max − min). The tables above "
+             "show seed 0 of each." if ablations else
+             "Mean success [%] over every shipped training seed of a method and, in brackets, its spread (max − min); "
+             "a method with one row (one training seed, or a planner that is not trained) shows that row's value. "
+             "The tables above show each learned method's default checkpoint; its seeds have their own tables below.")
+    title = "### Ablations over their training seeds" if ablations else "### Every method over its training seeds"
+    out = [title, "", intro,
            "", "| method | seeds | " + " | ".join(f"Table {t} {row}" for t, row in settings) + " |",
            "|---|---|" + "---|" * len(settings)]
     for lb, fam in families.items():

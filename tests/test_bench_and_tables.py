@@ -158,6 +158,8 @@ def test_ablations_get_their_training_seeds_and_a_figure_with_seed_spread(tmp_pa
               "h2int-flat-seed2": "seeds:h2int-flat"}
     md = leaderboard.leaderboard_markdown(board, groups)
     assert "## h2int-flat across training seeds" in md and "| mean [spread], 3 seeds | 70.0 [20.0] |" in md
+    section = md.split("### Ablations over their training seeds")[1].split("##")[0]  # the ablation question
+    assert "| h2int | 1 | 90.0 |" in section and "| h2int-flat | 3 | 70.0 [20.0] |" in section
     leaderboard.plot_board(board, str(tmp_path / "ablation.png"), groups, rows="ablation")
     assert (tmp_path / "ablation.png").stat().st_size > 10_000
 
