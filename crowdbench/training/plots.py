@@ -91,8 +91,16 @@ def _schedule(cfg: dict[str, Any]) -> tuple[int, int]:
 
 
 def _colour_key(cfg: dict[str, Any]) -> tuple[Any, ...]:
-    """What one colour stands for: architecture, epochs, mini-batches, learning rate and schedule, curriculum."""
-    return (_architecture(cfg), *_schedule(cfg), cfg.get("learning_rate"), cfg.get("schedule"), cfg.get("anneal", True))
+    """What one colour stands for: architecture, epochs, mini-batches, learning rate and schedule, policy noise,
+    curriculum."""
+    return (_architecture(cfg), *_schedule(cfg), cfg.get("learning_rate"), cfg.get("schedule"), _noise(cfg),
+            cfg.get("anneal", True))
+
+
+def _noise(cfg: dict[str, Any]) -> str:
+    """``" std S fixed"`` for a run whose model keeps its policy std fixed (``learn_std=False``), else ``""``."""
+    model = cfg.get("model") or {}
+    return f" std {model.get('action_std', 1.0):g} fixed" if model.get("learn_std") is False else ""
 
 
 def _architecture(cfg: dict[str, Any]) -> str:
@@ -116,7 +124,7 @@ def _run_label(cfg: dict[str, Any]) -> str:
     epochs, mini_batches = _schedule(cfg)
     name = _architecture(cfg)
     lr = (f" lr {cfg['learning_rate']:g} {cfg.get('schedule', 'adaptive')}" if "learning_rate" in cfg else "")
-    return (f"{name} {epochs}×{mini_batches}{lr} seed {cfg['seed']}"
+    return (f"{name} {epochs}×{mini_batches}{lr}{_noise(cfg)} seed {cfg['seed']}"
             f"{' (ρ annealed)' if cfg.get('anneal', True) else ' (no annealing, ρ = 0)'}")
 
 

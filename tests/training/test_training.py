@@ -326,3 +326,14 @@ def test_recurrent_baselines_train_their_small_widths_unless_told_otherwise(monk
     assert seen[2].model.robot_embed == 64 and AIGConfig().robot_embed == 256
     assert seen[3].model.latent == 32 and seen[3].model.edge_rnn == 64
     assert seen[4].model.variant == "h2int"
+
+
+def test_curve_labels_name_the_recipe_that_differs():
+    """`crowdbench curves` labels tell apart runs that differ only in schedule or in a fixed policy noise."""
+    from crowdbench.training.plots import _colour_key, _run_label
+
+    base = {"method": "dsrnn", "seed": 0, "epochs": 4, "mini_batches": 4, "learning_rate": 3e-4,
+            "schedule": "adaptive", "anneal": False, "model": {"edge_rnn": 64, "learn_std": True}}
+    fixed = {**base, "model": {"edge_rnn": 64, "learn_std": False, "action_std": 0.3}}
+    assert "std" not in _run_label(base) and "lr 0.0003 adaptive std 0.3 fixed seed 0" in _run_label(fixed)
+    assert _colour_key(base) != _colour_key(fixed)
