@@ -189,10 +189,10 @@ def train_steps_per_s(iterations: int, repeats: int, threads: int = 2, env_proce
     from crowdbench.training.methods import PPO_METHODS
     from crowdbench.training.trainer import Trainer
 
+    model = PPO_METHODS.get(method)().variant_model(variant)
     samples = []
     for r in range(repeats):
         with tempfile.TemporaryDirectory() as tmp:
-            model = PPO_METHODS.get(method)().variant_model(variant)
             cfg = TrainConfig.for_method(method, model=model, iterations=iterations + 2, eval_every=0,
                                          checkpoint_every=10**6, seed=r, threads=threads, env_processes=env_processes)
             tr = Trainer(cfg, tmp, quiet=True)
