@@ -73,7 +73,7 @@ class SharedTrunkPPO(PPO):
             trajs, envs = trajectory_shares(masks, (actor.work(batch.observations) * masks).sum(0), threads)
             count = float(T * n)
             share = partial(_share, self, params, batch, count)
-            results = (list(pool(threads).map(share, trajs, envs)) if threads > 1
+            results = (list(pool(threads).map(share, trajs, envs)) if len(trajs) > 1
                        else [share(trajs[0], envs[0])])
             if self.desired_kl is not None and self.schedule == "adaptive":
                 mean = batch.actions.new_empty((T, n, batch.actions.shape[2]))

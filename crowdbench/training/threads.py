@@ -45,7 +45,9 @@ def trajectory_shares(masks: torch.Tensor, cost: torch.Tensor, threads: int
     ``masks`` ``(T, J)``: validity of the padded trajectories (rsl-rl's ``split_and_pad_trajectories`` layout: each
     environment's trajectories consecutive, their lengths summing to ``T``); ``cost`` ``(J,)``: work per trajectory.
     Returns per share the trajectory columns and the environments (both ascending); the share's trajectories,
-    unpadded, are exactly its environments' ``(T, ·)`` columns of the unpadded mini-batch.
+    unpadded, are exactly its environments' ``(T, ·)`` columns of the unpadded mini-batch. Shares that would hold
+    no environment (more threads than the mini-batch has environments) are left out, so there may be fewer than
+    ``threads``.
     """
     T = masks.shape[0]
     lengths = masks.sum(0)
@@ -53,5 +55,6 @@ def trajectory_shares(masks: torch.Tensor, cost: torch.Tensor, threads: int
     n_env = int(env_of[-1]) + 1 if env_of.numel() else 0
     owner = balanced_owners(torch.zeros(n_env, dtype=torch.float64).index_add_(0, env_of, cost.double()), threads)
     traj_owner = owner[env_of]
-    return ([torch.nonzero(traj_owner == k).squeeze(1) for k in range(threads)],
-            [torch.nonzero(owner == k).squeeze(1) for k in range(threads)])
+    shares = [k for k in range(threads) if bool((owner == k).any())]
+    return ([torch.nonzero(traj_owner == k).squeeze(1) for k in shares],
+            [torch.nonzero(owner == k).squeeze(1) for k in shares])

@@ -150,6 +150,9 @@ def test_per_thread_ppo_update_equals_rsl_rl_update(tmp_path, threads):
         trajs, envs = trajectory_shares(batch.masks, torch.ones(batch.masks.shape[1]), 2)
         assert sorted(torch.cat(envs).tolist()) == list(range(8))
         assert sorted(torch.cat(trajs).tolist()) == list(range(batch.masks.shape[1]))
+        trajs, envs = trajectory_shares(batch.masks, torch.ones(batch.masks.shape[1]), 12)  # more threads than worlds
+        assert len(envs) == len(trajs) == 8 and all(e.numel() == 1 for e in envs)
+        assert sorted(torch.cat(trajs).tolist()) == list(range(batch.masks.shape[1]))
         start = copy.deepcopy((alg.actor.state_dict(), alg.critic.state_dict(), alg.optimizer.state_dict(),
                                alg.learning_rate, alg.storage))
         before = [p.detach().clone() for p in (*alg.actor.parameters(), *alg.critic.parameters())]
