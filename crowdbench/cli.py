@@ -131,6 +131,8 @@ def train_cmd(args: argparse.Namespace) -> int:
     method = PPO_METHODS.get(args.algo)()
     speed = {name: getattr(args, name) for name in RESUMABLE if getattr(args, name) is not None}
     if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
+        if args.init:
+            raise ValueError("--init, --resume: a resumed run already has its weights; valid choices: one of them")
         if args.variant is not None or args.model:
             raise ValueError("--variant/--model: a resumed run keeps its architecture; drop them with --resume")
         fixed = [f"--{k.replace('_', '-')}" for k in NEW_RUN_ONLY if getattr(args, k) is not None]
@@ -152,7 +154,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         cfg = TrainConfig.for_method(args.algo, **overrides)
         out = args.out or os.path.join("runs", f"{method.label(cfg.model)}-seed{cfg.seed}")
     print(f"training {cfg.method} ({method.label(cfg.model)}) seed={cfg.seed} → {out}")
-    trainer = train(cfg, out, resume=args.resume)
+    trainer = train(cfg, out, resume=args.resume, init=args.init)
     print(f"wrote {os.path.join(out, 'last.pt')} and {os.path.join(out, 'curve.png')} "
           f"({trainer.iteration} iterations, {trainer.env_steps:,} env steps, {trainer.elapsed / 60:.1f} min)")
     return 0
@@ -165,7 +167,7 @@ def train_value_cmd(args: argparse.Namespace) -> int:
     """CADRL / SARL: imitation of the ORCA robot, then TD learning (:mod:`crowdbench.training.value`)."""
     from crowdbench.training.value import ValueTrainConfig, resume_config, train_value
 
-    ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "model", "iterations", "until_success",
+    ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "model", "init", "iterations", "until_success",
                                                      "env_processes", *NEW_RUN_ONLY)
                 if getattr(args, k) is not None] + ([] if args.anneal is None else ["--anneal/--no-anneal"])
     if ppo_only:
@@ -409,6 +411,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
     p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")
+    p.add_argument("--init", default=None, metavar="CHECKPOINT",
+                   help="start a new run from this run's network weights (same architecture; the noise fields "
+                        "action_std/learn_std, schedule, optimiser and counters are the new run's): fine-tuning")
     p.add_argument("--iterations", type=int, default=None, help="stop after this many PPO iterations in total")
     p.add_argument("--minutes", type=float, default=None, help="wall-clock budget in minutes")
     p.add_argument("--until-success", type=float, default=None,

@@ -9,6 +9,10 @@ from typing import Any
 RESUMABLE = ("iterations", "minutes", "until_success", "threads", "env_processes")
 """Fields a resumed run may change (budget and speed settings; the others are the run's identity)."""
 
+NOISE_FIELDS = ("action_std", "learn_std")
+"""Model fields of the policy noise: a run started from another's weights (``--init``) may set them anew, since
+they shape exploration, not the network."""
+
 
 @dataclass(frozen=True)
 class TrainConfig:
@@ -83,6 +87,10 @@ class TrainConfig:
     """Episodes per quick evaluation."""
     until_success: float = 0.0
     """Stop after the first quick evaluation whose success rate reaches this (0 = never; needs ``eval_every``)."""
+    init: dict[str, Any] | None = None
+    """Where this run's network started (``crowdbench train --init``): ``None`` for fresh weights, else the
+    provenance of the checkpoint whose weights it took (``path``, ``sha256``, ``method``, ``seed``, ``iteration``,
+    ``env_steps``); set by :meth:`~crowdbench.training.trainer.Trainer.warm_start`, not by hand."""
     extra: dict[str, Any] = field(default_factory=dict)
     """Free-form notes stored with the run (not read by training)."""
 

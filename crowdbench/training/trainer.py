@@ -14,6 +14,7 @@ therefore continues bit for bit as if the run had not stopped (tested).
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import json
 import os
 import sys
@@ -26,7 +27,7 @@ from rsl_rl.runners import OnPolicyRunner
 
 from crowdbench import __version__, checkpoints
 from crowdbench.io import write_text
-from crowdbench.training.config import RESUMABLE, TrainConfig
+from crowdbench.training.config import NOISE_FIELDS, RESUMABLE, TrainConfig
 from crowdbench.training.curriculum import Curriculum
 from crowdbench.training.malloc import keep_heap
 from crowdbench.training.methods import PPO_METHODS, PPOMethod
@@ -123,6 +124,35 @@ class Trainer:
         self.history, self.evals = ckpt["history"], ckpt["evals"]
         self.history.setdefault("action_std", [None] * len(self.history["iteration"]))  # runs saved before it
         self._restart_episodes()
+
+    def warm_start(self, path: str) -> None:
+        """Start this new run from the network weights of the run saved in ``path`` (``--init``): actor and critic
+        (observation normaliser included) are copied; the policy noise (:data:`NOISE_FIELDS`), optimiser, learning
+        rate, curriculum, counters and history are this run's own. The architecture must match; the provenance goes
+        into ``cfg.init``. Fine-tuning with another schedule or a smaller fixed std, say, is a new run this way,
+        with its own curve, rather than a resume that changes its configuration half-way."""
+        if self.iteration:
+            raise ValueError("--init: only a new run starts from another run's weights")
+        ckpt = load_resumable(path, "--init")
+        theirs = TrainConfig.from_dict(ckpt["train_config"])
+        if theirs.method != self.cfg.method:
+            raise ValueError(f"--init: {path!r} is a {theirs.method} run, not {self.cfg.method}")
+        mine_m, theirs_m = self.cfg.to_dict()["model"], theirs.to_dict()["model"]
+        diff = sorted(k for k in mine_m if k not in NOISE_FIELDS and mine_m[k] != theirs_m.get(k))
+        if diff:
+            raise ValueError(f"--init: the checkpoint's architecture differs in {diff}; only {', '.join(NOISE_FIELDS)} "
+                             "may differ (name its --variant/--model fields)")
+        actor = dict(ckpt["actor"])
+        for key, value in self.alg.actor.state_dict().items():
+            if key.startswith("distribution."):  # the noise is the new run's (e.g. a smaller fixed std)
+                actor[key] = value
+        self.alg.actor.load_state_dict(actor)
+        self.alg.critic.load_state_dict(ckpt["critic"])
+        with open(path, "rb") as f:
+            digest = hashlib.sha256(f.read()).hexdigest()
+        self.cfg = dataclasses.replace(self.cfg, init={
+            "path": os.path.abspath(path), "sha256": digest, "method": theirs.method, "seed": theirs.seed,
+            "iteration": int(ckpt["iteration"]), "env_steps": int(ckpt["env_steps"])})
 
     def _restart_episodes(self) -> None:
         """Fresh episodes everywhere and zeroed GRU states (zeroed in place, not set to None: rsl-rl's storage
@@ -234,11 +264,12 @@ class Trainer:
                    title=f"{self.method.label(self.cfg.model)} (seed {self.cfg.seed})")
 
 
-def load_resumable(path: str) -> dict[str, Any]:
-    """A checkpoint that today's training path can continue (clear error for weights-only files)."""
+def load_resumable(path: str, option: str = "--resume") -> dict[str, Any]:
+    """A checkpoint that today's training path can continue (clear error, naming ``option``, for weights-only
+    files)."""
     ckpt = checkpoints.load(path)
     if "train_config" not in ckpt:
-        raise ValueError(f"--resume: {path!r} holds a policy's weights but no training state; it cannot be resumed "
+        raise ValueError(f"{option}: {path!r} holds a policy's weights but no training state; it cannot be resumed "
                          f"(it evaluates: crowdbench evaluate {ckpt.get('method')} --checkpoint PATH). Start a new "
                          "run.")
     return ckpt
@@ -253,13 +284,18 @@ def resume_config(path: str, **changes: Any) -> TrainConfig:
     return dataclasses.replace(cfg, **changes)
 
 
-def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = False) -> Trainer:
-    """Train (or resume from ``resume``: a run folder or checkpoint) and return the trainer; ``out/last.pt`` holds
-    the final checkpoint."""
+def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = False,
+          init: str | None = None) -> Trainer:
+    """Train (or resume from ``resume``: a run folder or checkpoint; or start a new run from the weights of
+    ``init``, :meth:`Trainer.warm_start`) and return the trainer; ``out/last.pt`` holds the final checkpoint."""
+    if resume and init:
+        raise ValueError("--init, --resume: a resumed run already has its weights; valid choices: one of them")
     trainer = Trainer(cfg, out, quiet=quiet)
     try:
         if resume:
             trainer.load(checkpoints.run_checkpoint(resume))
+        elif init:
+            trainer.warm_start(checkpoints.run_checkpoint(init))
         trainer.train()
     finally:
         trainer.close()

@@ -270,7 +270,7 @@ def configs_of_new_runs(monkeypatch, argvs: list[list[str]]) -> list:
 
     seen = []
 
-    def fake_train(cfg, out, resume=None):
+    def fake_train(cfg, out, resume=None, init=None):
         seen.append(cfg)
         raise SystemExit(0)
 
@@ -337,3 +337,48 @@ def test_curve_labels_name_the_recipe_that_differs():
     fixed = {**base, "model": {"edge_rnn": 64, "learn_std": False, "action_std": 0.3}}
     assert "std" not in _run_label(base) and "lr 0.0003 adaptive std 0.3 fixed seed 0" in _run_label(fixed)
     assert _colour_key(base) != _colour_key(fixed)
+
+
+def test_init_starts_a_new_run_from_another_runs_weights_with_its_own_noise(runs, tmp_path, capsys):
+    """`--init` (fine-tuning): a new run takes a saved run's actor and critic — not its policy noise, optimiser,
+    counters or history —, records where they came from (kept through a resume), and refuses another architecture,
+    another method, or being combined with `--resume`."""
+    import hashlib
+
+    from crowdbench.training.ppo import gaussian_std
+    from crowdbench.training.trainer import Trainer, resume_config
+
+    root, straight, _ = runs
+    src = root / "straight" / "last.pt"
+    tr = Trainer(tiny(model={"action_std": 0.15}), str(tmp_path / "probe"), quiet=True)
+    try:
+        tr.warm_start(str(src))
+        theirs, mine = straight.alg.actor.state_dict(), tr.alg.actor.state_dict()
+        for k in theirs:
+            if not k.startswith("distribution."):
+                torch.testing.assert_close(mine[k], theirs[k], rtol=0, atol=0)
+        for k, v in straight.alg.critic.state_dict().items():
+            torch.testing.assert_close(tr.alg.critic.state_dict()[k], v, rtol=0, atol=0)
+        assert torch.allclose(gaussian_std(tr.alg.actor.distribution), torch.tensor(0.15))
+        assert tr.iteration == 0 and tr.history["iteration"] == [] and tr.alg.optimizer.state_dict()["state"] == {}
+        assert tr.cfg.init["iteration"] == 4 and tr.cfg.init["sha256"] == hashlib.sha256(src.read_bytes()).hexdigest()
+    finally:
+        tr.close()
+    with pytest.raises(ValueError, match=r"architecture differs in \['d_model'\]"):
+        wide = Trainer(tiny(model={"d_model": 32}), str(tmp_path / "wide"), quiet=True)
+        try:
+            wide.warm_start(str(src))
+        finally:
+            wide.close()
+
+    out = tmp_path / "ft"
+    ft = train(tiny(iterations=2, model={"action_std": 0.15}), str(out), init=str(src), quiet=True)
+    saved = torch.load(out / "last.pt", weights_only=True)
+    assert saved["train_config"]["init"] == ft.cfg.init and saved["iteration"] == 2
+    resumed = train(resume_config(str(out / "last.pt"), iterations=3), str(out), resume=str(out), quiet=True)
+    assert resumed.cfg.init == ft.cfg.init and resumed.history["action_std"] == [pytest.approx(0.15)] * 3
+
+    assert main(["train", "h2int", "--resume", "runs/x", "--init", "runs/y"]) == 2
+    assert "--init, --resume: a resumed run already has its weights" in capsys.readouterr().err
+    assert main(["train", "sarl", "--init", "runs/y"]) == 2
+    assert "--init" in capsys.readouterr().err
