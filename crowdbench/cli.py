@@ -119,7 +119,7 @@ def train_cmd(args: argparse.Namespace) -> int:
         return train_value_cmd(args)
     from crowdbench.training.config import RESUMABLE, TrainConfig
     from crowdbench.training.methods import PPO_METHODS
-    from crowdbench.training.trainer import resume_config, train
+    from crowdbench.training.trainer import check_start, resume_config, train
 
     if args.algo not in PPO_METHODS.names():
         raise ValueError(f"train: unknown method {args.algo!r}; valid choices: "
@@ -130,9 +130,8 @@ def train_cmd(args: argparse.Namespace) -> int:
                          f"not of {args.algo}")
     method = PPO_METHODS.get(args.algo)()
     speed = {name: getattr(args, name) for name in RESUMABLE if getattr(args, name) is not None}
+    check_start(args.resume, args.init)  # before the resumed checkpoint is read
     if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
-        if args.init:
-            raise ValueError("--init, --resume: a resumed run already has its weights; valid choices: one of them")
         if args.variant is not None or args.model:
             raise ValueError("--variant/--model: a resumed run keeps its architecture; drop them with --resume")
         fixed = [f"--{k.replace('_', '-')}" for k in NEW_RUN_ONLY if getattr(args, k) is not None]

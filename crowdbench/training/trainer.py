@@ -284,12 +284,17 @@ def resume_config(path: str, **changes: Any) -> TrainConfig:
     return dataclasses.replace(cfg, **changes)
 
 
+def check_start(resume: str | None, init: str | None) -> None:
+    """One clear error for a run asked both to resume and to start from other weights."""
+    if resume and init:
+        raise ValueError("--init, --resume: a resumed run already has its weights; valid choices: one of them")
+
+
 def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = False,
           init: str | None = None) -> Trainer:
     """Train (or resume from ``resume``: a run folder or checkpoint; or start a new run from the weights of
     ``init``, :meth:`Trainer.warm_start`) and return the trainer; ``out/last.pt`` holds the final checkpoint."""
-    if resume and init:
-        raise ValueError("--init, --resume: a resumed run already has its weights; valid choices: one of them")
+    check_start(resume, init)
     trainer = Trainer(cfg, out, quiet=quiet)
     try:
         if resume:
@@ -302,4 +307,4 @@ def train(cfg: TrainConfig, out: str, resume: str | None = None, quiet: bool = F
     return trainer
 
 
-__all__ = ["TrainConfig", "Trainer", "resume_config", "rsl_cfg", "train"]
+__all__ = ["TrainConfig", "Trainer", "check_start", "resume_config", "rsl_cfg", "train"]
