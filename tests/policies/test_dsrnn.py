@@ -186,15 +186,18 @@ def test_shipped_checkpoint_loads_safely_and_navigates_a_crowd_better_than_drivi
     assert dsrnn["success_rate"] >= straight["success_rate"] + 0.15, (dsrnn, straight)
 
 
-def test_learn_std_false_keeps_the_policy_noise_fixed_through_training(tmp_path):
+@pytest.mark.parametrize("method", ["dsrnn", "aig_gst"])
+def test_learn_std_false_keeps_the_policy_noise_fixed_through_training(tmp_path, method):
     """`--model learn_std=false --model action_std=0.3` (H²INT's fixed covariance) leaves the std at 0.3 after
-    PPO updates, while the original's learned std moves from its 1.0 start."""
+    PPO updates, while the original's learned std moves from its 1.0 start — for both recurrent baselines."""
     from crowdbench.training.config import TrainConfig
     from crowdbench.training.trainer import train
 
+    extra = {"predictor": "const_vel"} if method == "aig_gst" else {}
     stds = []
     for learn in (False, True):
-        cfg = TrainConfig.for_method("dsrnn", model={"learn_std": learn, "action_std": 0.3 if not learn else 1.0},
+        model = {**extra, "learn_std": learn, "action_std": 0.3 if not learn else 1.0}
+        cfg = TrainConfig.for_method(method, model=model,
                                      num_envs=8, steps_per_env=8, mini_batches=2, iterations=2, threads=1,
                                      env_processes=1, eval_every=0, humans_range=(2, 4), learning_rate=1e-2)
         tr = train(cfg, str(tmp_path / str(learn)), quiet=True)

@@ -58,7 +58,10 @@ class AIGConfig:
     head_dims: tuple[int, ...] = (256, 256)
     """Hidden widths of the actor and critic heads (tanh) [-]."""
     action_std: float = 1.0
-    """Initial standard deviation of the Gaussian policy (learned, state-independent) [m/s]."""
+    """Initial standard deviation of the Gaussian policy (state-independent) [m/s]."""
+    learn_std: bool = True
+    """Whether PPO learns the standard deviation (the original) or keeps it at :attr:`action_std` (the shipped
+    DS-RNN's recipe: ``--model learn_std=false --model action_std=0.3``)."""
     predictor: str = "gst"
     """Trajectory predictor of the ``predicted`` observation: ``gst`` (learned), ``const_vel`` or ``truth``."""
     predictor_checkpoint: str = "gst"
@@ -68,7 +71,7 @@ class AIGConfig:
         """Keyword arguments of :class:`AIGActor` (and rsl-rl's ``actor`` config)."""
         return {"config": self, "hidden_dims": list(self.head_dims), "activation": "tanh",
                 "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": self.action_std,
-                                     "learn_std": True}}
+                                     "learn_std": self.learn_std}}
 
     def observation_kwargs(self) -> dict[str, Any]:
         """Options of the ``predicted`` observation this network reads."""
