@@ -29,6 +29,12 @@ from rsl_rl.modules import RNN
 from tensordict import TensorDict
 
 
+def gaussian_cfg(init_std: float, learn_std: bool) -> dict[str, Any]:
+    """rsl-rl's ``distribution_cfg`` of a state-independent Gaussian policy: standard deviation ``init_std``
+    [m/s], learned by PPO or kept fixed (every PPO method's actor uses it)."""
+    return {"class_name": "GaussianDistribution", "init_std": init_std, "learn_std": learn_std}
+
+
 class RecurrentTrunkActor(MLPModel):
     """rsl-rl actor: encoder → GRU → MLP head → Gaussian mean (see the module docstring).
 

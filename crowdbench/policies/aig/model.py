@@ -32,7 +32,7 @@ from rsl_rl.modules import RNN
 from tensordict import TensorDict
 from torch import nn
 
-from crowdbench.training.models import RecurrentTrunkActor
+from crowdbench.training.models import RecurrentTrunkActor, gaussian_cfg
 
 
 @dataclass(frozen=True)
@@ -70,8 +70,7 @@ class AIGConfig:
     def actor_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :class:`AIGActor` (and rsl-rl's ``actor`` config)."""
         return {"config": self, "hidden_dims": list(self.head_dims), "activation": "tanh",
-                "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": self.action_std,
-                                     "learn_std": self.learn_std}}
+                "distribution_cfg": gaussian_cfg(self.action_std, self.learn_std)}
 
     def observation_kwargs(self) -> dict[str, Any]:
         """Options of the ``predicted`` observation this network reads."""

@@ -35,7 +35,7 @@ from rsl_rl.utils import unpad_trajectories
 from tensordict import TensorDict
 from torch import nn
 
-from crowdbench.training.models import RecurrentTrunkActor
+from crowdbench.training.models import RecurrentTrunkActor, gaussian_cfg
 
 ROBOT_NODE = 7
 """Robot node features: the first 7 of the robot vector [p_x, p_y, r, g_x, g_y, v_pref, θ]."""
@@ -88,8 +88,7 @@ class DSRNNConfig:
     def actor_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :class:`DSRNNActor` (and rsl-rl's ``actor`` config)."""
         return {"config": self, "hidden_dims": list(self.head_dims), "activation": "tanh",
-                "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": self.action_std,
-                                     "learn_std": self.learn_std}}
+                "distribution_cfg": gaussian_cfg(self.action_std, self.learn_std)}
 
 
 class DSRNNCore(nn.Module):

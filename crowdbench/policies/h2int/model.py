@@ -28,7 +28,7 @@ from rsl_rl.modules import EmpiricalNormalization
 from tensordict import TensorDict
 
 from crowdbench.policies.h2int._kernels.packed import packed_encode
-from crowdbench.training.models import RecurrentTrunkActor
+from crowdbench.training.models import RecurrentTrunkActor, gaussian_cfg
 
 VARIANTS = ("h2int", "flat", "meanpool", "standard")
 EDGE_SCALE = 5.0
@@ -169,8 +169,7 @@ class H2INTConfig:
         """Keyword arguments of :class:`H2INTActor` (and rsl-rl's ``actor`` config)."""
         return {"variant": self.variant, "d_model": self.d_model, "heads": self.heads, "ffn": self.ffn,
                 "gru_hidden": self.gru_hidden, "hidden_dims": list(self.head_dims),
-                "distribution_cfg": {"class_name": "GaussianDistribution", "init_std": self.action_std,
-                                     "learn_std": False}}
+                "distribution_cfg": gaussian_cfg(self.action_std, learn_std=False)}
 
 
 class H2INTActor(RecurrentTrunkActor):
