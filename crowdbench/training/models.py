@@ -29,9 +29,16 @@ from rsl_rl.modules import RNN
 from tensordict import TensorDict
 
 
+def check_action_std(action_std: float) -> None:
+    """One clear error for a non-positive policy standard deviation (each PPO config's ``__post_init__``)."""
+    if not (isinstance(action_std, int | float) and action_std > 0):
+        raise ValueError(f"action_std={action_std!r}; valid choices: a positive float [m/s]")
+
+
 def gaussian_cfg(init_std: float, learn_std: bool) -> dict[str, Any]:
     """rsl-rl's ``distribution_cfg`` of a state-independent Gaussian policy: standard deviation ``init_std``
     [m/s], learned by PPO or kept fixed (every PPO method's actor uses it)."""
+    check_action_std(init_std)
     return {"class_name": "GaussianDistribution", "init_std": init_std, "learn_std": learn_std}
 
 

@@ -264,6 +264,15 @@ def test_model_overrides_parse_by_field_type_and_reject_bad_input(capsys):
     assert "keeps its architecture" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("method", ["h2int", "dsrnn", "aig_gst"])
+@pytest.mark.parametrize("std", ["0", "-0.3"])
+def test_a_non_positive_policy_std_is_one_clear_error_before_training(method, std, capsys):
+    """`--model action_std=S` with S ≤ 0 stops at the config, naming the field and the valid range, for every PPO
+    method (not deep inside rsl-rl's Gaussian)."""
+    assert main(["train", method, "--model", f"action_std={std}", "--out", "runs/never"]) == 2
+    assert f"action_std={float(std)!r}; valid choices: a positive float [m/s]" in capsys.readouterr().err
+
+
 def configs_of_new_runs(monkeypatch, argvs: list[list[str]]) -> list:
     """The TrainConfig `crowdbench train ARGV --out runs/never` builds for each of ``argvs`` (training replaced)."""
     import crowdbench.training.trainer as trainer_mod

@@ -32,7 +32,7 @@ from rsl_rl.modules import RNN
 from tensordict import TensorDict
 from torch import nn
 
-from crowdbench.training.models import RecurrentTrunkActor, gaussian_cfg
+from crowdbench.training.models import RecurrentTrunkActor, check_action_std, gaussian_cfg
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,9 @@ class AIGConfig:
     """Trajectory predictor of the ``predicted`` observation: ``gst`` (learned), ``const_vel`` or ``truth``."""
     predictor_checkpoint: str = "gst"
     """The ``gst`` predictor's checkpoint (path or shipped name)."""
+
+    def __post_init__(self) -> None:
+        check_action_std(self.action_std)
 
     def actor_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :class:`AIGActor` (and rsl-rl's ``actor`` config)."""

@@ -35,7 +35,7 @@ from rsl_rl.utils import unpad_trajectories
 from tensordict import TensorDict
 from torch import nn
 
-from crowdbench.training.models import RecurrentTrunkActor, gaussian_cfg
+from crowdbench.training.models import RecurrentTrunkActor, check_action_std, gaussian_cfg
 
 ROBOT_NODE = 7
 """Robot node features: the first 7 of the robot vector [p_x, p_y, r, g_x, g_y, v_pref, θ]."""
@@ -79,6 +79,7 @@ class DSRNNConfig:
     def __post_init__(self) -> None:
         if self.slots not in SLOT_ORDERS:
             raise ValueError(f"slots={self.slots!r}; valid choices: {', '.join(SLOT_ORDERS)}")
+        check_action_std(self.action_std)
 
     @property
     def observation(self) -> str:

@@ -28,7 +28,7 @@ from rsl_rl.modules import EmpiricalNormalization
 from tensordict import TensorDict
 
 from crowdbench.policies.h2int._kernels.packed import packed_encode
-from crowdbench.training.models import RecurrentTrunkActor, gaussian_cfg
+from crowdbench.training.models import RecurrentTrunkActor, check_action_std, gaussian_cfg
 
 VARIANTS = ("h2int", "flat", "meanpool", "standard")
 EDGE_SCALE = 5.0
@@ -161,8 +161,7 @@ class H2INTConfig:
                 raise ValueError(f"{name}={getattr(self, name)!r}; valid choices: an integer ≥ 1")
         if self.d_model % self.heads:
             raise ValueError(f"heads={self.heads}; valid choices: a divisor of d_model={self.d_model}")
-        if not self.action_std > 0:
-            raise ValueError(f"action_std={self.action_std!r}; valid choices: a positive float [m/s]")
+        check_action_std(self.action_std)
         object.__setattr__(self, "head_dims", tuple(int(h) for h in self.head_dims))
 
     def actor_kwargs(self) -> dict[str, Any]:
