@@ -30,7 +30,8 @@ from tensordict import TensorDict
 
 
 def check_action_std(action_std: float) -> None:
-    """One clear error for a non-positive policy standard deviation (each PPO config's ``__post_init__``)."""
+    """One clear error for a non-positive policy standard deviation (each PPO config's ``__post_init__``, so a
+    config that exists is valid and :func:`gaussian_cfg` need not check again)."""
     if not (isinstance(action_std, int | float) and action_std > 0):
         raise ValueError(f"action_std={action_std!r}; valid choices: a positive float [m/s]")
 
@@ -38,7 +39,6 @@ def check_action_std(action_std: float) -> None:
 def gaussian_cfg(init_std: float, learn_std: bool) -> dict[str, Any]:
     """rsl-rl's ``distribution_cfg`` of a state-independent Gaussian policy: standard deviation ``init_std``
     [m/s], learned by PPO or kept fixed (every PPO method's actor uses it)."""
-    check_action_std(init_std)
     return {"class_name": "GaussianDistribution", "init_std": init_std, "learn_std": learn_std}
 
 
