@@ -91,6 +91,20 @@ def load(path: str | os.PathLike, method: str | None = None) -> dict[str, Any]:
     return ckpt
 
 
+def training_budget(ckpt: dict[str, Any]) -> dict[str, int]:
+    """What a checkpoint's training consumed: ``{"env_steps": n}`` for a PPO run — its own env steps plus, when it
+    started from another run's weights (``crowdbench train --init``), that run's as recorded in its config —,
+    ``{"episodes": n}`` for a value method's (CADRL, SARL) reinforcement-learning episodes; ``{}`` when the checkpoint
+    records neither."""
+    if "env_steps" in ckpt:
+        init = (ckpt.get("train_config") or {}).get("init") or {}
+        before = init.get("total_env_steps", init.get("env_steps", 0))
+        return {"env_steps": int(ckpt["env_steps"]) + int(before)}
+    if "episodes" in ckpt:
+        return {"episodes": int(ckpt["episodes"])}
+    return {}
+
+
 def save(ckpt: dict[str, Any], path: str | os.PathLike) -> str:
     """Write ``ckpt`` atomically (temporary file + rename) with ``torch.save``; returns the path."""
     import torch

@@ -27,6 +27,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from crowdbench import leaderboard
 from crowdbench.io import write_text
 from crowdbench.leaderboard import Cell, Entry, cells, leaderboard_markdown, markdown, plot_board, scenario_digest
 from crowdbench.validate import check_fields
@@ -311,11 +312,11 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
         write_text(os.path.join(out, f"{e.slug}.json"),
                    json.dumps({"meta": meta, "results": rows}, indent=2) + "\n")
         write_text(os.path.join(out, f"{e.slug}.md"), markdown(rows))
-    everyone, groups, planners = gather(out, suite, board, {e.label: e.group for e in entries},
-                                        {e.label: fps[e.label] for e in entries})
+    everyone, groups, planners, every_fp = gather(out, suite, board, {e.label: e.group for e in entries},
+                                                  {e.label: fps[e.label] for e in entries})
     write_text(os.path.join(out, "LEADERBOARD.md"),
                leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name,
-                                    planners=planners))
+                                    planners=planners, budgets=leaderboard.training_budgets(every_fp)))
     if {"I", "II"} & set(suite.tables):
         plot_board(everyone, os.path.join(out, "success.png"), groups, planners=planners)
         if "ablation" in groups.values():
@@ -325,12 +326,12 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
 
 def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], groups: dict[str, str],
            fingerprints: dict[str, dict[str, Any]]
-           ) -> tuple[dict[str, list[dict[str, Any]]], dict[str, str], frozenset[str]]:
+           ) -> tuple[dict[str, list[dict[str, Any]]], dict[str, str], frozenset[str], dict[str, dict[str, Any]]]:
     """The run's ``board`` plus every other method file in ``out`` scored on the same suite (same digest), so a run
     of some methods leaves the others on ``LEADERBOARD.md``; in leaderboard order (:data:`~crowdbench.leaderboard.
-    METHODS`, each method's other training seeds after it, then the rest by label). Returns rows, groups and the
-    planners (labels whose fingerprint — ``fingerprints`` for the run's entries, the stored one otherwise — has no
-    checkpoint)."""
+    METHODS`, each method's other training seeds after it, then the rest by label). Returns rows, groups, the
+    planners (labels whose fingerprint has no checkpoint) and every label's fingerprint (``fingerprints`` for the
+    run's entries, the stored one otherwise)."""
     from crowdbench.leaderboard import METHODS
 
     rows, groups, fingerprints = {}, dict(groups), dict(fingerprints)
@@ -353,7 +354,7 @@ def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], group
         return (order.index(base) if base in order else len(order), base != label, label)
 
     planners = frozenset(lb for lb in rows if not fingerprints.get(lb, {}).get("checkpoint_sha256"))
-    return {lb: rows[lb] for lb in sorted(rows, key=key)}, groups, planners
+    return {lb: rows[lb] for lb in sorted(rows, key=key)}, groups, planners, fingerprints
 
 
 def print_progress(line: str) -> None:

@@ -379,10 +379,12 @@ def _clear_best(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
 def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[str, str] | None = None,
                          episodes: int | None = None, seed: int | None = None,
                          reference: str | None = "h2int", suite: str | None = None,
-                         planners: frozenset[str] = frozenset()) -> str:
+                         planners: frozenset[str] = frozenset(),
+                         budgets: dict[str, dict[str, int]] | None = None) -> str:
     """The paper's tables with one row per method: success / collision / timeout [%], navigation time [s] per
     setting; the best success of each setting in bold. Ablation entries get their own tables, headed by the
-    ``reference`` method's row when it is on the board. ``planners`` (labels with no checkpoint) get no seed count."""
+    ``reference`` method's row when it is on the board. ``planners`` (labels with no checkpoint) get no seed count;
+    ``budgets`` (:func:`training_budgets`) adds each method's training per seed to the over-seeds tables."""
     groups = groups or {}
     out = ["# crowdbench leaderboard", ""]
     if episodes is not None:
@@ -450,7 +452,7 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
         if group in ("main", "ablation"):
             families = {lb: [lb, *(x for x in board if groups.get(x, "main").startswith("seeds")
                                    and family(groups[x]) == lb)] for lb in labels}
-            out += _over_seeds(board, families, planners, ablations=group == "ablation")
+            out += _over_seeds(board, families, planners, ablations=group == "ablation", budgets=budgets)
     return "\n".join(out)
 
 
@@ -463,12 +465,49 @@ def _mean_spread(board: dict[str, list[dict[str, Any]]], labels: list[str], tabl
     return f"{vals[0]:.1f}" if len(vals) == 1 else f"{sum(vals) / len(vals):.1f} [{max(vals) - min(vals):.1f}]"
 
 
+def training_budgets(fingerprints: dict[str, dict[str, Any]]) -> dict[str, dict[str, int]]:
+    """Each label's training budget (:func:`crowdbench.checkpoints.training_budget`), read from its checkpoint when
+    the file on disk is the one its fingerprint names (same SHA-256); labels without a checkpoint, or whose file is
+    missing or differs, are left out."""
+    import hashlib
+
+    from crowdbench import checkpoints
+
+    out = {}
+    for label, fp in fingerprints.items():
+        name, sha = (fp.get("kwargs") or {}).get("checkpoint"), fp.get("checkpoint_sha256")
+        if not name or not sha:
+            continue
+        try:
+            path = checkpoints.resolve(fp["policy"], name)
+            with open(path, "rb") as f:
+                if hashlib.sha256(f.read()).hexdigest() != sha:
+                    continue
+            out[label] = checkpoints.training_budget(checkpoints.load(path, fp["policy"]))
+        except (OSError, ValueError, KeyError):
+            continue
+    return out
+
+
+def _budget_cell(budgets: list[dict[str, int]]) -> str:
+    """``"29.5 M steps"``, ``"5.9–28.3 M steps"`` (the range over seeds) or ``"10,000 episodes"``; "—" unless every
+    seed's budget is known."""
+    for key, unit in (("env_steps", "M steps"), ("episodes", "episodes")):
+        if budgets and all(key in b for b in budgets):
+            vals = sorted(b[key] for b in budgets)
+            lo, hi = ((f"{v / 1e6:.1f}" if key == "env_steps" else f"{v:,}") for v in (vals[0], vals[-1]))
+            return f"{lo} {unit}" if lo == hi else f"{lo}–{hi} {unit}"
+    return "—"
+
+
 def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list[str]],
-                planners: frozenset[str] = frozenset(), ablations: bool = False) -> list[str]:
+                planners: frozenset[str] = frozenset(), ablations: bool = False,
+                budgets: dict[str, dict[str, int]] | None = None) -> list[str]:
     """The main methods' (or, with ``ablations``, the reference's and its ablations') headline settings (Tables I,
     II and III pooled) as mean success [spread] over each method's training seeds (``families``: main label → its
     seed labels, itself first); nothing when no method has several. The seed count is "—" for ``planners``
-    (nothing trained)."""
+    (nothing trained). With ``budgets`` (label → :func:`crowdbench.checkpoints.training_budget`), a column gives
+    each method's training per seed: env steps (PPO), or RL episodes (value methods)."""
     if all(len(f) < 2 for f in families.values()):
         return []
     settings = sorted(dict.fromkeys((r["table"], r["row"]) for lb in families for r in board[lb]
@@ -480,11 +519,18 @@ def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list
              "Mean success [%] over every shipped training seed of a method and, in brackets, its spread (max − min); "
              "a method with one row (one training seed, or a planner that is not trained) shows that row's value. "
              "The tables above show each learned method's default checkpoint; its seeds have their own tables below.")
+    if budgets is not None:
+        intro += (" *Training per seed*: the env steps of a PPO method (a fine-tune's counting those of the run it "
+                  "started from) or the reinforcement-learning episodes of a value method, read from the "
+                  "checkpoints — methods trained on different budgets are not compared like for like.")
     title = "### Ablations over their training seeds" if ablations else "### Every method over its training seeds"
+    budget_head = ("training per seed | ", "---|") if budgets is not None else ("", "")
     out = [title, "", intro,
-           "", "| method | seeds | " + " | ".join(f"Table {t} {row}" for t, row in settings) + " |",
-           "|---|---|" + "---|" * len(settings)]
+           "", f"| method | seeds | {budget_head[0]}" + " | ".join(f"Table {t} {row}" for t, row in settings) + " |",
+           f"|---|---|{budget_head[1]}" + "---|" * len(settings)]
     for lb, fam in families.items():
         cells_ = [_mean_spread(board, fam, t, row) for t, row in settings]
+        if budgets is not None:
+            cells_.insert(0, "—" if lb in planners else _budget_cell([budgets.get(x, {}) for x in fam]))
         out.append(f"| {lb} | {'—' if lb in planners else len(fam)} | " + " | ".join(cells_) + " |")
     return [*out, ""]

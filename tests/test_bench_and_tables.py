@@ -138,6 +138,29 @@ def test_the_main_section_gives_every_method_over_its_seeds():
     assert "| h2int | 2 | 90.0 [10.0] | 85.0 [10.0] |" in section  # plain "seeds" group = the reference's
 
 
+def test_the_over_seeds_table_gives_each_methods_training_budget():
+    """With budgets, every method's training per seed stands beside its success: env steps (a range when its seeds
+    differ), RL episodes for value methods, "—" for a planner or when a seed's budget is unknown."""
+    def rows(p):
+        return [{"policy": "x", "table": "I", "row": "High", "success_rate": p, "collision_rate": 1 - p,
+                 "timeout_rate": 0.0, "nav_time": 10.0}]
+
+    board = {"orca": rows(0.9), "dsrnn": rows(0.7), "dsrnn-seed1": rows(0.9), "aig_gst": rows(0.8),
+             "aig_gst-seed1": rows(0.7), "sarl": rows(0.95), "cadrl": rows(0.6)}
+    groups = {"orca": "main", "dsrnn": "main", "aig_gst": "main", "sarl": "main", "cadrl": "main",
+              "dsrnn-seed1": "seeds:dsrnn", "aig_gst-seed1": "seeds:aig_gst"}
+    budgets = {"dsrnn": {"env_steps": 28_339_200}, "dsrnn-seed1": {"env_steps": 5_852_160},
+               "aig_gst": {"env_steps": 5_852_160}, "aig_gst-seed1": {"env_steps": 5_852_160},
+               "sarl": {"episodes": 10_000}}
+    md = leaderboard.leaderboard_markdown(board, groups, planners=frozenset({"orca"}), budgets=budgets)
+    section = md.split("### Every method over its training seeds")[1].split("##")[0]
+    assert "| method | seeds | training per seed | Table I High |" in section
+    assert "| orca | — | — | 90.0 |" in section
+    assert "| dsrnn | 2 | 5.9–28.3 M steps | 80.0 [20.0] |" in section
+    assert "| aig_gst | 2 | 5.9 M steps | 75.0 [10.0] |" in section
+    assert "| sarl | 1 | 10,000 episodes | 95.0 |" in section and "| cadrl | 1 | — | 60.0 |" in section
+
+
 def test_ablations_get_their_training_seeds_and_a_figure_with_seed_spread(tmp_path, monkeypatch):
     from crowdbench import checkpoints
 

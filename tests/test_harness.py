@@ -118,7 +118,7 @@ def test_figure_legends_give_seed_counts_to_learned_methods_only(tmp_path):
     entries = [leaderboard.ENTRIES["orca"], leaderboard.ENTRIES["h2int"]]
     harness.run(suite(rows=("II/N=10",)), entries, str(tmp_path))
     fps = {"h2int": harness.fingerprint(entries[1], suite(rows=("II/N=10",)))}
-    rows, groups, planners = harness.gather(str(tmp_path), suite(rows=("II/N=10",)), {}, {}, fps)
+    rows, groups, planners, _ = harness.gather(str(tmp_path), suite(rows=("II/N=10",)), {}, {}, fps)
     assert list(rows) == ["orca", "h2int"] and planners == {"orca"}  # orca's from its stored file
     assert leaderboard.legend_label("orca", 1, trained=False) == "orca"
     assert leaderboard.legend_label("h2int", 1) == "h2int (1 seed)"

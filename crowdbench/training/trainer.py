@@ -152,7 +152,8 @@ class Trainer:
             digest = hashlib.sha256(f.read()).hexdigest()
         self.cfg = dataclasses.replace(self.cfg, init={
             "path": os.path.abspath(path), "sha256": digest, "method": theirs.method, "seed": theirs.seed,
-            "iteration": int(ckpt["iteration"]), "env_steps": int(ckpt["env_steps"])})
+            "iteration": int(ckpt["iteration"]), "env_steps": int(ckpt["env_steps"]),
+            "total_env_steps": checkpoints.training_budget(ckpt)["env_steps"]})
 
     def _restart_episodes(self) -> None:
         """Fresh episodes everywhere and zeroed GRU states (zeroed in place, not set to None: rsl-rl's storage

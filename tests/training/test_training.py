@@ -384,6 +384,16 @@ def test_init_starts_a_new_run_from_another_runs_weights_with_its_own_noise(runs
     ft = train(tiny(iterations=2, model={"action_std": 0.15}), str(out), init=str(src), quiet=True)
     saved = torch.load(out / "last.pt", weights_only=True)
     assert saved["train_config"]["init"] == ft.cfg.init and saved["iteration"] == 2
+    # its training budget counts the start's env steps too, and a fine-tune of the fine-tune counts all three runs
+    from crowdbench.checkpoints import training_budget
+
+    src_steps = torch.load(src, weights_only=True)["env_steps"]
+    assert training_budget(saved) == {"env_steps": src_steps + saved["env_steps"]}
+    ft2 = train(tiny(iterations=1, model={"action_std": 0.1}), str(tmp_path / "ft2"), init=str(out / "last.pt"),
+                quiet=True)
+    ft2.close()
+    again = torch.load(tmp_path / "ft2" / "last.pt", weights_only=True)
+    assert training_budget(again) == {"env_steps": src_steps + saved["env_steps"] + again["env_steps"]}
     resumed = train(resume_config(str(out / "last.pt"), iterations=3), str(out), resume=str(out), quiet=True)
     assert resumed.cfg.init == ft.cfg.init and resumed.history["action_std"] == [pytest.approx(0.15)] * 3
 
