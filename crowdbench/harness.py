@@ -27,9 +27,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from crowdbench import leaderboard
 from crowdbench.io import write_text
-from crowdbench.leaderboard import Cell, Entry, cells, leaderboard_markdown, markdown, plot_board, scenario_digest
+from crowdbench.leaderboard import (
+    Cell,
+    Entry,
+    cells,
+    leaderboard_markdown,
+    markdown,
+    plot_board,
+    scenario_digest,
+    training_budgets,
+)
 from crowdbench.validate import check_fields
 
 SUITES_DIR = Path(__file__).resolve().parent / "suites"
@@ -316,7 +324,7 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
                                                   {e.label: fps[e.label] for e in entries})
     write_text(os.path.join(out, "LEADERBOARD.md"),
                leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name,
-                                    planners=planners, budgets=leaderboard.training_budgets(every_fp)))
+                                    planners=planners, budgets=training_budgets(every_fp)))
     if {"I", "II"} & set(suite.tables):
         plot_board(everyone, os.path.join(out, "success.png"), groups, planners=planners)
         if "ablation" in groups.values():
