@@ -91,6 +91,14 @@ def load(path: str | os.PathLike, method: str | None = None) -> dict[str, Any]:
     return ckpt
 
 
+def file_sha256(path: str | os.PathLike) -> str:
+    """SHA-256 (hex) of a checkpoint file's bytes: what fingerprints and ``--init`` provenance record."""
+    import hashlib
+
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).hexdigest()
+
+
 def training_budget(ckpt: dict[str, Any]) -> dict[str, int]:
     """What a checkpoint's training consumed: ``{"env_steps": n}`` for a PPO run — its own env steps plus, when it
     started from another run's weights (``crowdbench train --init``), that run's as recorded in its config —,

@@ -341,7 +341,6 @@ def scenario_digest(tables: tuple[str, ...] = ("I", "II", "III")) -> str:
 def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
     """What a cached result must match to be reused: policy, arguments, checkpoint contents, episodes, seed, and the
     scenario (:func:`scenario_digest`)."""
-    import hashlib
     import os
 
     from crowdbench import checkpoints
@@ -352,8 +351,7 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
     if ckpt:
         ckpt = checkpoints.resolve(entry.policy, ckpt)  # a path, or the name of a shipped checkpoint
     if ckpt and os.path.exists(ckpt):
-        with open(ckpt, "rb") as f:
-            digest = hashlib.sha256(f.read()).hexdigest()
+        digest = checkpoints.file_sha256(ckpt)
     shown = {k: (v if k != "checkpoint" or not os.path.exists(v) else os.path.relpath(v)) for k, v in kwargs.items()}
     return {"policy": entry.policy, "kwargs": shown, "checkpoint_sha256": digest, "episodes": episodes, "seed": seed,
             "scenario": scenario_digest()}
@@ -469,8 +467,6 @@ def training_budgets(fingerprints: dict[str, dict[str, Any]]) -> dict[str, dict[
     """Each label's training budget (:func:`crowdbench.checkpoints.training_budget`), read from its checkpoint when
     the file on disk is the one its fingerprint names (same SHA-256); labels without a checkpoint, or whose file is
     missing or differs, are left out."""
-    import hashlib
-
     from crowdbench import checkpoints
 
     out = {}
@@ -480,9 +476,8 @@ def training_budgets(fingerprints: dict[str, dict[str, Any]]) -> dict[str, dict[
             continue
         try:
             path = checkpoints.resolve(fp["policy"], name)
-            with open(path, "rb") as f:
-                if hashlib.sha256(f.read()).hexdigest() != sha:
-                    continue
+            if checkpoints.file_sha256(path) != sha:
+                continue
             out[label] = checkpoints.training_budget(checkpoints.load(path, fp["policy"]))
         except (OSError, ValueError, KeyError):
             continue

@@ -79,11 +79,9 @@ def cell(entry: dict[str, Any], seed: int) -> dict[str, Any]:
 
 def checkpoint_steps(entry: dict[str, Any]) -> dict[str, Any]:
     """Iteration and env steps stored in the entry's checkpoint."""
-    import torch
-
     from crowdbench import checkpoints
 
-    ckpt = torch.load(checkpoints.resolve(entry["method"], entry["checkpoint"]), map_location="cpu", weights_only=True)
+    ckpt = checkpoints.load(checkpoints.resolve(entry["method"], entry["checkpoint"]), entry["method"])
     return {"iteration": ckpt.get("iteration"), "env_steps": ckpt.get("env_steps")}
 
 

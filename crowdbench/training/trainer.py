@@ -14,7 +14,6 @@ therefore continues bit for bit as if the run had not stopped (tested).
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import os
 import sys
@@ -148,10 +147,9 @@ class Trainer:
                 actor[key] = value
         self.alg.actor.load_state_dict(actor)
         self.alg.critic.load_state_dict(ckpt["critic"])
-        with open(path, "rb") as f:
-            digest = hashlib.sha256(f.read()).hexdigest()
         self.cfg = dataclasses.replace(self.cfg, init={
-            "path": os.path.abspath(path), "sha256": digest, "method": theirs.method, "seed": theirs.seed,
+            "path": os.path.abspath(path), "sha256": checkpoints.file_sha256(path), "method": theirs.method,
+            "seed": theirs.seed,
             "iteration": int(ckpt["iteration"]), "env_steps": int(ckpt["env_steps"]),
             "total_env_steps": checkpoints.training_budget(ckpt)["env_steps"]})
 
