@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from crowdbench.envs import CrowdNavEnv, CrowdParallelEnv, parallel_env, register_envs
 
-__version__ = "0.2.0"
+__version__ = "0.3.0"
 __all__ = ["CrowdNavEnv", "CrowdParallelEnv", "__version__", "parallel_env"]
 
 register_envs()

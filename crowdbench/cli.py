@@ -71,10 +71,20 @@ def _policy(args: argparse.Namespace, config=None):
     if args.policy_pos and args.policy not in (None, args.policy_pos):
         raise ValueError(f"policy given twice ({args.policy_pos!r} and --policy {args.policy!r}); give one")
     factory = POLICIES.get(name or "orca")
-    if args.checkpoint and "checkpoint" not in inspect.signature(factory).parameters:
+    params = inspect.signature(factory).parameters
+    if args.checkpoint and "checkpoint" not in params:
         raise ValueError(f"--checkpoint: policy {name!r} takes no checkpoint; checkpoint-backed policies: "
                          + ", ".join(n for n in POLICIES.names() if n in CHECKPOINT_POLICIES))
-    return make_policy(name or "orca", config, **({"checkpoint": args.checkpoint} if args.checkpoint else {}))
+    kwargs = {"checkpoint": args.checkpoint} if args.checkpoint else {}
+    sensing = getattr(args, "sensing", None)
+    if sensing is not None and "sensing" in params:
+        kwargs["sensing"] = sensing
+    policy = make_policy(name or "orca", config, **kwargs)
+    if sensing is not None and policy.sensing != sensing:
+        raise ValueError(f"--sensing {sensing}: policy {name!r} senses at tier {policy.sensing!r} and has no "
+                         "sensing option; valid choices: omit --sensing, or a policy with a sensing option "
+                         "(orca, social_force, cadrl, sarl)")
+    return policy
 
 
 CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl", "dsrnn", "aig_gst")
@@ -91,7 +101,7 @@ def evaluate(args: argparse.Namespace) -> int:
     eps = run_episodes(policy, args.episodes, seed=args.seed, num_worlds=args.worlds, layout=args.layout,
                        num_humans=args.humans, human_model=args.human_model,
                        human_model_kwargs=_model_kwargs(args.human_model, args.responsiveness),
-                       counterfactual=args.pedestrian_delay, progress=bar.update)
+                       counterfactual=args.pedestrian_delay, progress=bar.update, sensing=args.sensing)
     bar.close()
     summary = summarize(eps)
     for k, v in summary.items():
@@ -159,7 +169,7 @@ def train_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
-VALUE_ONLY = ("worlds", "il_episodes", "rl_episodes", "free_space")
+VALUE_ONLY = ("worlds", "il_episodes", "rl_episodes", "free_space", "sensing")
 
 
 def train_value_cmd(args: argparse.Namespace) -> int:
@@ -261,25 +271,11 @@ def panels_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
-def calibrate_cmd(args: argparse.Namespace) -> int:
-    """Classic robots' Table I/II rows under each scenario step (``crowdbench.calibration``)."""
-    from crowdbench import calibration
+def paper_cmd(args: argparse.Namespace) -> int:
+    """Every stored board cell beside the paper's number (:mod:`crowdbench.paper`); reads cells, runs nothing."""
+    from crowdbench import paper
 
-    steps = calibration.STEPS
-    if args.steps:
-        wanted = [int(k) for k in args.steps.split(",")]
-        bad = [k for k in wanted if not 0 <= k < len(steps)]
-        if bad:
-            raise ValueError(f"--steps {bad}; valid choices: 0 … {len(steps) - 1}")
-        steps = tuple(steps[k] for k in wanted)
-    from crowdbench.progress import Progress
-
-    bar = Progress(2 * len(steps), "scenario × robot jobs", f"{6 * args.episodes} episodes each: ")
-    results = calibration.run(args.episodes, args.seed, args.workers, steps, progress=bar)
-    meta = {"command": "crowdbench " + " ".join(sys.argv[1:]), "episodes": args.episodes, "seed": args.seed}
-    if args.json:
-        calibration.save(results, args.json, meta)
-    print(calibration.markdown(results))
+    print(paper.report(args.out, args.md))
     return 0
 
 
@@ -329,6 +325,9 @@ def _methods(spec: str | None, add: list[str]) -> list:
                 chosen.append(leaderboard.ENTRIES[item])
             elif "=" in item:
                 chosen.append(leaderboard.parse_entry(item))
+            elif item in leaderboard.STALE:
+                raise ValueError(f"--methods {item}: {leaderboard.STALE[item]}. To score a checkpoint anyway, name it: "
+                                 f"--add LABEL={item}@PATH")
             elif item in POLICIES.names():
                 chosen.append(leaderboard.Entry(item, item))
             else:
@@ -360,7 +359,10 @@ def leaderboard_list_cmd(args: argparse.Namespace) -> int:
     for slug, e in leaderboard.ENTRIES.items():
         ckpt = e.policy_kwargs().get("checkpoint")
         where = f"  checkpoint {os.path.relpath(checkpoints.resolve(e.policy, ckpt))}" if ckpt else ""
-        print(f"  {slug:<22} policy {e.policy:<14} group {e.group:<14}{where}")
+        tier = f"sensing={leaderboard.entry_sensing(e)}"
+        print(f"  {slug:<22} policy {e.policy:<14} group {e.group:<14} {tier:<19}{where}")
+    for label, why in leaderboard.STALE.items():
+        print(f"  {label:<22} not on the board: {why}")
     print("registered robot policies (built-in and entry-point plug-ins; any can run with --methods NAME):")
     for name in POLICIES.names():
         names = checkpoints.shipped_names(name)
@@ -398,6 +400,9 @@ def main(argv: list[str] | None = None) -> int:
                         "pedestrians (doubles the crowd simulation)")
     p.add_argument("--checkpoint", default=None,
                    help="checkpoint of a checkpoint-backed policy: a path or a shipped name (h2int: meanpool, ...)")
+    p.add_argument("--sensing", default=None, choices=("positions", "velocities", "full"),
+                   help="sensing tier (default: the policy's own — positions for every board method, as on the "
+                        "board); policies that read pedestrian states (orca, social_force, cadrl, sarl) take any")
     p.set_defaults(func=evaluate)
     p = sub.add_parser("train", help="train a learned policy: H²INT (rsl-rl PPO), CADRL or SARL (value learning)")
     p.add_argument("algo", metavar="METHOD", help="h2int (or another registered PPO method), cadrl or sarl")
@@ -441,6 +446,8 @@ def main(argv: list[str] | None = None) -> int:
                    help="cadrl/sarl: episodes run at once (default 10; same episode and update counts)")
     p.add_argument("--il-episodes", type=int, default=None, help="cadrl/sarl: ORCA demonstrations (default 3000)")
     p.add_argument("--rl-episodes", type=int, default=None, help="cadrl/sarl: TD-learning episodes (default 10000)")
+    p.add_argument("--sensing", default=None, choices=("positions", "velocities", "full"),
+                   help="cadrl/sarl: sensing tier trained at (default positions: velocities estimated from positions)")
     p.add_argument("--free-space", action=argparse.BooleanOptionalAction, default=None,
                    help="cadrl/sarl: value states with nobody sensed analytically (default off: it made CADRL worse, "
                         "README)")
@@ -487,6 +494,10 @@ def main(argv: list[str] | None = None) -> int:
                    help="results folder (default: leaderboards for the paper suite, else runs/leaderboard-SUITE)")
     q.add_argument("--force", action="store_true", help="re-evaluate stored cells too")
     q.set_defaults(func=leaderboard_run_cmd)
+    q = lsub.add_parser("paper", help="every stored cell beside the paper's Tables I–III (reads cells only)")
+    q.add_argument("--out", default="leaderboards", help="the leaderboard folder (default leaderboards)")
+    q.add_argument("--md", default=None, help="markdown file to write (default OUT/PAPER.md)")
+    q.set_defaults(func=paper_cmd)
     q = lsub.add_parser("list", help="shipped entries, registered policies with checkpoints, suites")
     q.set_defaults(func=leaderboard_list_cmd)
     p = sub.add_parser("plot", help="success trends of `tables` result files (ablation figure)")
@@ -511,13 +522,6 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", default="trajectories.png")
     p.set_defaults(func=panels_cmd)
-    p = sub.add_parser("calibrate", help="classic robots' Table I/II rows under each scenario step")
-    p.add_argument("--episodes", type=int, default=500)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--workers", type=int, default=2, help="processes")
-    p.add_argument("--steps", default=None, help="comma-separated step numbers (default: all)")
-    p.add_argument("--json", default=None, help="write the results to this JSON file")
-    p.set_defaults(func=calibrate_cmd)
     p = sub.add_parser("bench", help="measure throughput (simulator, ORCA, training, inference)")
     p.add_argument("--quick", action="store_true", help="fewer steps and repeats")
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")

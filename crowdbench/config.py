@@ -69,18 +69,17 @@ class WorldConfig:
     """Pedestrian preferred (and maximum) speed when ``human_v_pref_range`` is None [m/s]."""
     human_radius_range: tuple[float, float] | None = (0.3, 0.5)
     """Each pedestrian's radius is drawn per episode (and per re-spawn) from U(lo, hi) — CrowdNav++'s
-    ``randomize_attributes``, the calibrated default (``leaderboards/README.md``); None: every pedestrian has
-    ``human_radius`` [m]."""
+    ``randomize_attributes`` (``crowd_sim/envs/utils/agent.py:44-50``); None: every pedestrian has ``human_radius``
+    [m]."""
     human_v_pref_range: tuple[float, float] | None = (0.5, 1.5)
-    """Each pedestrian's preferred (and maximum) speed is drawn from U(lo, hi) (then capped at ``human_speed_cap``
-    if set) — CrowdNav++'s range, the calibrated default; None: ``human_v_pref`` [m/s]."""
+    """Each pedestrian's ``v_pref`` is drawn from U(lo, hi) (then capped at ``human_speed_cap`` if set) — CrowdNav++'s
+    range. It is the pedestrian's speed *limit*; how fast it prefers to walk is the pedestrian model's (CrowdNav++'s
+    ORCA: 1 m/s, :class:`~crowdbench.humans.orca.ORCAParams`). None: ``human_v_pref`` [m/s]."""
     human_speed_cap: float | None = None
-    """Upper bound on drawn pedestrian speeds. CrowdNav++ draws v_pref ~ U(0.5, 1.5) but its ORCA prefers a unit
-    velocity, so its people walk at min(v_pref, 1) m/s; with that cap (1.0) the ORCA robot does better than the
-    paper reports in the low-responsiveness and dense cells (calibration step 7), without it every cell is within
-    ±5 points — so the default is no cap (a departure from CrowdNav++ noted in the README). None: no cap [m/s]."""
+    """Optional upper bound on drawn ``v_pref`` (None: no cap, as CrowdNav++) [m/s]."""
     sensing_range: float = 5.0
-    """Robot sensing range: pedestrians whose centre is farther are not observed [m]."""
+    """Robot sensing range: pedestrians whose surface distance to the robot (centre distance minus both radii,
+    CrowdNav++'s ``detect_visible``) is larger are not observed [m]."""
     human_sensing_range: float = 5.0
     """Range of each pedestrian's own observation of its neighbours [m]."""
     kinematics: str = "holonomic"

@@ -18,15 +18,19 @@ from crowdbench.config import make_config
 from crowdbench.humans.base import make as make_model
 from crowdbench.metrics import Episode, EpisodeMeter, summarize
 from crowdbench.policies.base import RobotPolicy, check_actions
-from crowdbench.robots.observations import make_observation
+from crowdbench.robots.observations import check_tier, make_observation
 from crowdbench.worlds.world import OUTCOMES, CrowdWorld
 
 
 def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: int = 16,
                  layout: str = "circle_crossing", num_humans: int = 20, human_model: Any = "responsive_orca",
                  human_model_kwargs: dict | None = None, counterfactual: bool = False,
-                 progress: Callable[[int], None] | None = None, **world_options: Any) -> list[Episode]:
+                 progress: Callable[[int], None] | None = None, sensing: str | None = None,
+                 **world_options: Any) -> list[Episode]:
     """Run ``episodes`` episodes of ``policy`` in a batch of ``num_worlds`` worlds; returns them ordered by seed.
+
+    ``sensing``: the most the robot's sensor may give (a tier of :data:`~crowdbench.robots.observations.SENSING`;
+    None: whatever the policy asks for); a policy needing more is one ``ValueError``.
 
     With ``counterfactual``, a twin batch of the same seeds runs alongside with the robot absent (invisible to the
     pedestrians), for the pedestrians' delay (:mod:`crowdbench.metrics`); it costs a second crowd simulation.
@@ -34,6 +38,7 @@ def run_episodes(policy: RobotPolicy, episodes: int, seed: int = 0, num_worlds: 
     """
     if episodes < 1:
         raise ValueError(f"episodes must be ≥ 1, got {episodes}")
+    check_tier(policy.observation, sensing)
     config = make_config(num_humans=num_humans, **world_options)
     B = min(num_worlds, episodes)
     model = make_model(human_model, **(human_model_kwargs or {})) if isinstance(human_model, str) else human_model

@@ -56,6 +56,10 @@ class Suite:
     """Episodes per cell."""
     seed: int = 0
     """Evaluation seed: episode k of every cell runs world seed ``seed + k``."""
+    check_seed: int | None = None
+    """A second, disjoint evaluation seed range: every cell is evaluated there too and stored beside its result
+    (``check``), out of sample — the two must agree within their intervals (``crowdbench leaderboard paper``
+    reports where they do not). None: no check."""
     tables: tuple[str, ...] = ("I", "II", "III")
     """Which of the paper's tables (their cells: :func:`crowdbench.leaderboard.cells`)."""
     rows: tuple[str, ...] = ()
@@ -74,6 +78,10 @@ class Suite:
                 raise ValueError(f"suite {self.name!r}: {key}={getattr(self, key)!r}; valid choices: an integer ≥ 1")
         if not isinstance(self.seed, int) or self.seed < 0:
             raise ValueError(f"suite {self.name!r}: seed={self.seed!r}; valid choices: an integer ≥ 0")
+        if self.check_seed is not None and (not isinstance(self.check_seed, int)
+                                            or abs(self.check_seed - self.seed) < self.episodes):
+            raise ValueError(f"suite {self.name!r}: check_seed={self.check_seed!r}; valid choices: None or an integer "
+                             f"at least episodes={self.episodes} away from seed={self.seed} (disjoint world seeds)")
         object.__setattr__(self, "tables", tuple(self.tables))
         object.__setattr__(self, "rows", tuple(self.rows))
         bad = [t for t in self.tables if t not in ("I", "II", "III")]
@@ -192,7 +200,12 @@ def run_cell(entry: Entry, cell: Cell, suite: Suite) -> dict[str, Any]:
         row = evaluate_cells(entry.policy, [cell], suite.episodes, suite.seed, num_worlds=suite.worlds,
                              policy_kwargs=entry.policy_kwargs(), progress=False, label=entry.label,
                              counterfactual=suite.counterfactual)[0]
-        return {"result": row, "cpu": cpu_model()}
+        out: dict[str, Any] = {"result": row, "cpu": cpu_model()}
+        if suite.check_seed is not None:
+            out["check"] = evaluate_cells(entry.policy, [cell], suite.episodes, suite.check_seed,
+                                          num_worlds=suite.worlds, policy_kwargs=entry.policy_kwargs(),
+                                          progress=False, label=entry.label, counterfactual=False)[0]
+        return out
     except Exception as e:  # noqa: BLE001 - a failing cell is recorded, the run goes on
         msg = str(e).splitlines()[0] if str(e) else ""
         return {"error": f"{type(e).__name__}: {msg}", "wall_s": round(time.time() - t, 1), "cpu": cpu_model()}
@@ -312,19 +325,26 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
                         {"policy": e.label, "table": c.table, "row": c.row, "layout": c.layout, "humans": c.humans,
                          "responsiveness": c.rho, "seed": suite.seed, "error": o["error"]})
         board[e.label] = rows
+        checks = [outcomes[(e.label, cell_key(c))].get("check") for c in grid]
         cpus = sorted({outcomes[(e.label, cell_key(c))].get("cpu") or "unrecorded" for c in grid})
         meta = {"fingerprint": fps[e.label], "label": e.label, "group": e.group, "suite": suite.to_dict(),
                 "suite_digest": suite.digest(), "episodes": suite.episodes, "seed": suite.seed,
                 "wall_s": round(sum(r.get("wall_s", 0.0) for r in rows), 1),
                 "provenance": {**info, "cell_cpus": cpus}}
-        write_text(os.path.join(out, f"{e.slug}.json"),
-                   json.dumps({"meta": meta, "results": rows}, indent=2) + "\n")
+        doc: dict[str, Any] = {"meta": meta, "results": rows}
+        if any(checks):
+            doc["checks"] = [c for c in checks if c]
+        write_text(os.path.join(out, f"{e.slug}.json"), json.dumps(doc, indent=2) + "\n")
         write_text(os.path.join(out, f"{e.slug}.md"), markdown(rows))
     everyone, groups, planners, every_fp = gather(out, suite, board, {e.label: e.group for e in entries},
                                                   {e.label: fps[e.label] for e in entries})
+    from crowdbench.leaderboard import STALE
+
     write_text(os.path.join(out, "LEADERBOARD.md"),
                leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name,
-                                    planners=planners, budgets=training_budgets(every_fp)))
+                                    planners=planners, budgets=training_budgets(every_fp),
+                                    sensing={lb: fp.get("sensing", "positions") for lb, fp in every_fp.items()},
+                                    missing={lb: why for lb, why in STALE.items() if lb not in everyone}))
     if {"I", "II"} & set(suite.tables):
         plot_board(everyone, os.path.join(out, "success.png"), groups, planners=planners)
         if "ablation" in groups.values():

@@ -11,6 +11,7 @@ Each cell uses evaluation seed S (episode k ↔ world seed S + k), so every poli
 
 from __future__ import annotations
 
+import functools
 import json
 import math
 import time
@@ -57,7 +58,7 @@ def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed
                    world_options: dict | None = None, counterfactual: bool = True) -> list[dict[str, Any]]:
     """Run every cell for one policy; returns one summary dict per cell (``policy`` = ``label`` or the name; the
     metrics of :func:`crowdbench.metrics.summarize`). ``layout_kwargs``, ``model_kwargs`` (latent-responsive ORCA) and
-    ``world_options`` (:class:`WorldConfig` fields) change the scenario from its defaults (the calibration does);
+    ``world_options`` (:class:`WorldConfig` fields) change the scenario from its defaults (studies do);
     ``counterfactual`` runs the robot-absent twin for the pedestrians' delay."""
     from crowdbench.worlds import make_layout
 
@@ -268,6 +269,7 @@ class Entry:
 METHODS: tuple[Entry, ...] = (
     Entry("orca", "orca"),
     Entry("social_force", "social_force"),
+    Entry("orca-velocities", "orca", (("sensing", "velocities"),)),
     Entry("h2int", "h2int", (("checkpoint", "h2int"),)),
     Entry("cadrl", "cadrl", (("checkpoint", "cadrl"),)),
     Entry("sarl", "sarl", (("checkpoint", "sarl"),)),
@@ -277,27 +279,56 @@ METHODS: tuple[Entry, ...] = (
     Entry("h2int-meanpool", "h2int", (("checkpoint", "meanpool"),), "ablation"),
     Entry("h2int-standard", "h2int", (("checkpoint", "standard"),), "ablation"),
 )
-"""The leaderboard's methods; a learned one appears once its checkpoint ships."""
+"""The leaderboard's methods; a learned one appears once a checkpoint trained on the current crowd ships. Rows at
+another sensing tier than ``positions`` (the ``sensing`` argument) get their own section of the board."""
+
+
+def trained_crowd(path: str) -> str | None:
+    """The crowd digest (:func:`~crowdbench.worlds.digest.crowd_digest`) a checkpoint records it was trained on;
+    None for checkpoints that do not say (trained before crowds were recorded)."""
+    from crowdbench import checkpoints
+
+    return _trained_crowd(path, checkpoints.file_sha256(path))
+
+
+@functools.lru_cache(maxsize=256)
+def _trained_crowd(path: str, sha256: str) -> str | None:
+    import torch
+
+    ckpt = torch.load(path, map_location="cpu", weights_only=True)
+    return ckpt.get("crowd") if isinstance(ckpt, dict) else None
+
+
+STALE: dict[str, str] = {}
+"""Shipped learned entries left off the board (label → why): their checkpoint was trained on another crowd."""
 
 
 def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
-    """``methods`` whose checkpoint is shipped (a learned method appears once its checkpoint lands), each main or
-    ablation entry followed by its other shipped training seeds (checkpoints ``<name>-seed<k>``, group
-    ``seeds:<label>``)."""
+    """``methods`` whose checkpoint is shipped and was trained on the current crowd (a learned method appears once
+    such a checkpoint lands; the others are listed in :data:`STALE`), each main or ablation entry followed by its
+    other shipped training seeds (checkpoints ``<name>-seed<k>``, group ``seeds:<label>``)."""
     import re
 
-    from crowdbench.checkpoints import shipped_names
+    from crowdbench.checkpoints import resolve, shipped_names
+    from crowdbench.worlds.digest import crowd_digest
 
     out: dict[str, Entry] = {}
+    current = crowd_digest()
     for e in methods:
         ckpt = e.policy_kwargs().get("checkpoint")
         names = shipped_names(e.policy) if ckpt else []
         if ckpt and ckpt not in names:
             continue
+        if ckpt and trained_crowd(resolve(e.policy, ckpt)) != current:
+            STALE[e.label] = ("trained on crowdbench's former crowd, not on the current CrowdNav++ one; back once "
+                              "retrained (`crowdbench train`)")
+            continue
         out[e.slug] = e
         if e.group in ("main", "ablation") and ckpt:
             seeds = sorted((int(m[1]), n) for n in names if (m := re.fullmatch(rf"{re.escape(ckpt)}-seed(\d+)", n)))
             for k, name in seeds:
+                if trained_crowd(resolve(e.policy, name)) != current:
+                    continue
                 seed_entry = Entry(f"{e.label}-seed{k}", e.policy, (("checkpoint", name),), f"seeds:{e.label}")
                 out[seed_entry.slug] = seed_entry
     return out
@@ -322,25 +353,21 @@ def parse_entry(spec: str) -> Entry:
 
 
 def scenario_digest(tables: tuple[str, ...] = ("I", "II", "III")) -> str:
-    """SHA-256 (16 hex digits) of everything that defines the crowds of the grid: the default world config, each
-    layout's settings and the pedestrian model's parameters — a cached result is stale when the scenario changes."""
-    import hashlib
+    """SHA-256 (16 hex digits) of everything that defines the crowds of the grid (:func:`~crowdbench.worlds.digest.
+    crowd_digest` over its layouts) — a cached result is stale when the scenario changes."""
+    from crowdbench.worlds.digest import crowd_digest
 
-    from crowdbench.config import WorldConfig
-    from crowdbench.humans import make as make_model
-    from crowdbench.worlds import make_layout
+    return crowd_digest(tuple(sorted({c.layout for c in cells(tables)})))
 
-    parts = [repr(WorldConfig())]
-    for layout in sorted({c.layout for c in cells(tables)}):
-        parts.append(f"{layout}: {sorted(vars(make_layout(layout)).items())}")
-    model = make_model("responsive_orca")
-    parts.append(repr(model.params) + repr(sorted((k, v) for k, v in vars(model).items() if isinstance(v, float))))
-    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]
+
+def entry_sensing(entry: Entry) -> str:
+    """The sensing tier of an entry's policy (built with its arguments: a checkpoint may set it)."""
+    return make_policy(entry.policy, **entry.policy_kwargs()).sensing
 
 
 def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
-    """What a cached result must match to be reused: policy, arguments, checkpoint contents, episodes, seed, and the
-    scenario (:func:`scenario_digest`)."""
+    """What a cached result must match to be reused: policy, arguments, sensing tier, checkpoint contents, episodes,
+    seed, and the scenario (:func:`scenario_digest`)."""
     import os
 
     from crowdbench import checkpoints
@@ -353,8 +380,8 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
     if ckpt and os.path.exists(ckpt):
         digest = checkpoints.file_sha256(ckpt)
     shown = {k: (v if k != "checkpoint" or not os.path.exists(v) else os.path.relpath(v)) for k, v in kwargs.items()}
-    return {"policy": entry.policy, "kwargs": shown, "checkpoint_sha256": digest, "episodes": episodes, "seed": seed,
-            "scenario": scenario_digest()}
+    return {"policy": entry.policy, "kwargs": shown, "sensing": entry_sensing(entry), "checkpoint_sha256": digest,
+            "episodes": episodes, "seed": seed, "scenario": scenario_digest()}
 
 
 TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
@@ -378,12 +405,16 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                          episodes: int | None = None, seed: int | None = None,
                          reference: str | None = "h2int", suite: str | None = None,
                          planners: frozenset[str] = frozenset(),
-                         budgets: dict[str, dict[str, int]] | None = None) -> str:
+                         budgets: dict[str, dict[str, int]] | None = None,
+                         sensing: dict[str, str] | None = None, missing: dict[str, str] | None = None) -> str:
     """The paper's tables with one row per method: success / collision / timeout [%], navigation time [s] per
     setting; the best success of each setting in bold. Ablation entries get their own tables, headed by the
     ``reference`` method's row when it is on the board. ``planners`` (labels with no checkpoint) get no seed count;
-    ``budgets`` (:func:`training_budgets`) adds each method's training per seed to the over-seeds tables."""
+    ``budgets`` (:func:`training_budgets`) adds each method's training per seed to the over-seeds tables.
+    ``sensing`` (label → tier): only ``positions`` rows are ranked together; rows at ``velocities`` and ``full``
+    get sections of their own. ``missing`` (label → reason): shipped methods left off the board, and why."""
     groups = groups or {}
+    tier = {lb: (sensing or {}).get(lb, "positions") for lb in board}
     out = ["# crowdbench leaderboard", ""]
     if episodes is not None:
         via = f"Suite `{suite}`: " if suite else ""
@@ -393,22 +424,41 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                 "setting, only where its interval does not overlap any other method's. Regenerate with "
                 "`crowdbench leaderboard run`; the per-method files hold the intervals of every column, path length, "
                 "Δv and the social metrics.", ""]
+    by_reason: dict[str, list[str]] = {}
+    for lb, why in (missing or {}).items():
+        by_reason.setdefault(why, []).append(f"`{lb}`")
+    out += [f"**Not on the board** ({why}): {', '.join(lbs)}.\n" for why, lbs in by_reason.items()]
+    out += ["Every robot here senses the same thing — `sensing=positions`: the relative positions of the pedestrians "
+            "within 5 m (surface distance), each step; methods that need velocities estimate them from those "
+            "positions. Rows given more (`velocities`: true velocities and radii; `full`: everyone, privileged) "
+            "have sections of their own below and are not ranked with the rest.", ""]
     board = {lb: with_pooled(rows) for lb, rows in board.items()}
+    extra = {t: [lb for lb in board if tier[lb] == t] for t in ("velocities", "full")}
+    extra = {t: lbs for t, lbs in extra.items() if lbs}
+    for lbs in extra.values():
+        for lb in lbs:
+            groups = {**groups, lb: f"sensing:{tier[lb]}"}
 
     def family(g: str) -> str:
         return g.split(":", 1)[1] if ":" in g else (reference or "")
 
     seed_groups = sorted({g for g in groups.values() if g == "seeds" or g.startswith("seeds:")},
                          key=lambda g: (family(g) != reference, family(g)))
-    for group in ("main", *seed_groups, "ablation"):
+    for group in ("main", *seed_groups, "ablation", *(f"sensing:{t}" for t in extra)):
         labels = [lb for lb in board if groups.get(lb, "main") == group]
         if not labels:
             continue
         head = family(group) if group.startswith("seeds") else reference
-        if group != "main" and head in board and head not in labels:
+        if group != "main" and not group.startswith("sensing") and head in board and head not in labels:
             labels.insert(0, head)
         if group == "ablation":
             out += ["## Ablations", ""]
+        if group.startswith("sensing"):
+            t = group.split(":", 1)[1]
+            out += [f"## Rows at `sensing={t}` (not ranked with the rest)", "",
+                    ("True velocities and radii of the pedestrians in range (CrowdNav's observable state): against "
+                     "the same method's `positions` row above, what true velocities are worth." if t == "velocities"
+                     else "Privileged: every pedestrian, any range, true velocities and radii — for debugging."), ""]
         if group.startswith("seeds"):
             out += [f"## {head} across training seeds", "",
                     f"Every shipped training seed of {head} on the same crowds; the last row gives the mean "

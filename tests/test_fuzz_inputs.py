@@ -192,7 +192,8 @@ CLI_JUNK = st.sampled_from(["-1", "0", "x", "nan", "1e9", "", "2.5", "--", "inf"
 
 
 @FUZZ
-@given(st.sampled_from(["evaluate", "render", "train", "tables", "leaderboard run", "calibrate", "panels", "export"]),
+@given(st.sampled_from(["evaluate", "render", "train", "tables", "leaderboard run", "leaderboard paper", "panels",
+                        "export"]),
        st.lists(st.tuples(st.sampled_from(["--episodes", "--humans", "--layout", "--human-model", "--responsiveness",
                                            "--seed", "--worlds", "--policy", "--checkpoint", "--suite", "--methods",
                                            "--workers", "--backend", "--iterations", "--envs", "--steps", "--bogus"]),
@@ -204,7 +205,7 @@ def test_cli(command, flags):
     if command == "train":
         argv.insert(1, "h2int")
         argv += ["--envs", "-1"]  # never start a real training run
-    if command in ("evaluate", "render", "panels", "tables", "calibrate", "leaderboard run"):
+    if command in ("evaluate", "render", "panels", "tables", "leaderboard run"):
         argv += ["--episodes", "-1"] if "--episodes" not in argv else []
 
     def run():

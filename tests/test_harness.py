@@ -115,7 +115,7 @@ def test_cells_are_stored_reused_and_faults_stay_in_their_cell(tmp_path, users_p
 
 
 def test_figure_legends_give_seed_counts_to_learned_methods_only(tmp_path):
-    entries = [leaderboard.ENTRIES["orca"], leaderboard.ENTRIES["h2int"]]
+    entries = [leaderboard.ENTRIES["orca"], leaderboard.Entry("h2int", "h2int", (("checkpoint", "h2int"),))]
     harness.run(suite(rows=("II/N=10",)), entries, str(tmp_path))
     fps = {"h2int": harness.fingerprint(entries[1], suite(rows=("II/N=10",)))}
     rows, groups, planners, _ = harness.gather(str(tmp_path), suite(rows=("II/N=10",)), {}, {}, fps)

@@ -20,7 +20,9 @@ a pedestrian reaching its goal gets a new one from the layout.
 
 Arguments: ``layout``, ``num_humans``, ``human_model`` (name or instance), ``human_model_kwargs``, ``seed`` (used
 by the first ``reset()`` without a seed), ``render_mode`` (``"rgb_array"``), ``observation`` (and its builder's
-``observation_kwargs``), ``max_cycles``, and any :class:`~crowdbench.config.WorldConfig` field as a keyword.
+``observation_kwargs``), ``sensing`` (the most the robot's sensor gives, a tier of
+:data:`~crowdbench.robots.observations.SENSING`: an ``observation`` needing more is one ``ValueError``; None: no
+limit), ``max_cycles``, and any :class:`~crowdbench.config.WorldConfig` field as a keyword.
 """
 
 from __future__ import annotations
@@ -33,7 +35,7 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from crowdbench.envs.common import build_world, render_frame, robot_action_space, robot_info
-from crowdbench.robots.observations import agent_observations, human_observation_space, make_observation
+from crowdbench.robots.observations import agent_observations, check_tier, human_observation_space, make_observation
 
 
 class CrowdParallelEnv(ParallelEnv):
@@ -44,7 +46,8 @@ class CrowdParallelEnv(ParallelEnv):
     def __init__(self, layout: str = "circle_crossing", num_humans: int = 20, human_model: Any = "orca",
                  seed: int | None = None, render_mode: str | None = None, observation: str = "relative",
                  max_cycles: int | None = None, human_model_kwargs: dict | None = None,
-                 observation_kwargs: dict | None = None, **world_options: Any):
+                 observation_kwargs: dict | None = None, sensing: str | None = None, **world_options: Any):
+        check_tier(observation, sensing)  # the robot's observation needs no more than the sensor gives
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode={render_mode!r}; valid choices: None, 'rgb_array'")
         if max_cycles is not None and (not isinstance(max_cycles, (int, np.integer)) or isinstance(max_cycles, bool)

@@ -64,6 +64,8 @@ class CrowdState:
     """The obstacles' edges, ``(S, 2, 2)`` [m]."""
     time_step: float
     """[s]"""
+    spawns: np.ndarray | None = None
+    """``(B, H)`` int: re-spawns of each slot this episode — a new person whenever it changes (None: never)."""
 
 
 class HumanModel(ABC):

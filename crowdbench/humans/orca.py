@@ -21,12 +21,24 @@ from crowdbench.validate import check_fields
 
 @dataclass(frozen=True)
 class ORCAParams:
-    """ORCA parameters: CrowdNav++'s pedestrians (the paper's observation and reward follow CrowdNav++): CrowdNav's
-    horizons and neighbour distance, a 0.15 m safety space and every agent a neighbour. CrowdNav's original
-    pedestrians: ``safety_space=0, max_neighbors=10`` (calibration in ``leaderboards/README.md``)."""
+    """ORCA parameters, CrowdNav++'s pedestrians by default (``crowd_nav/policy/orca.py``,
+    ``configs/config.py:116-120``, ``crowd_sim/envs/utils/agent.py:20-23``): a unit preferred velocity capped by
+    each pedestrian's ``v_pref``, horizons 5 s, a 0.15 m safety space, every agent a neighbour, and the
+    neighbour distance drawn from U(5, 10) m.
+    CrowdNav's original pedestrians: ``safety_space=0, max_neighbors=10, neighbor_dist_range=None``."""
 
     neighbor_dist: float = 10.0
-    """Neighbours are searched within this distance [m]."""
+    """Neighbours are searched within this distance [m] (when ``neighbor_dist_range`` is None)."""
+    neighbor_dist_range: tuple[float, float] | None = (5.0, 10.0)
+    """CrowdNav++'s quirk, mirrored: every agent it creates redraws ``neighbor_dist`` ~ U(lo, hi) into the *shared*
+    config, and an ORCA simulator reads it once, when it is built. So the crowd placed at reset shares the last draw
+    (one U(lo, hi) per episode here), and a re-spawned pedestrian takes a fresh draw of its own while the others
+    keep theirs. None: ``neighbor_dist`` for everyone [m]."""
+    preferred_speed: float | None = 1.0
+    """Length of the preferred velocity [m/s]: the goal vector cut to this length — CrowdNav++'s unit vector, the
+    raw goal vector within 1 m (``orca.py:98-100``) — while ``v_pref`` is only the speed limit (``orca.py:86``):
+    a pedestrian cruises at min(1, v_pref) m/s and exceeds 1 m/s only while avoiding. None: ``v_pref`` toward the
+    goal, landing on it within a step (RVO2's examples, crowdbench's calibrated crowd)."""
     max_neighbors: int | None = None
     """At most this many agent neighbours; ``None`` = every agent within ``neighbor_dist`` (CrowdNav++) [-]."""
     time_horizon: float = 5.0
@@ -47,6 +59,12 @@ class ORCAParams:
             raise ValueError(f"max_neighbors must be ≥ 0 or None (every agent), got {self.max_neighbors}")
         if self.safety_space < 0:
             raise ValueError(f"safety_space must be ≥ 0, got {self.safety_space}")
+        r = self.neighbor_dist_range
+        if r is not None and not (len(r) == 2 and 0 < r[0] <= r[1]):
+            raise ValueError(f"neighbor_dist_range={r!r}; valid choices: None or (lo, hi) with 0 < lo ≤ hi [m]")
+        if self.preferred_speed is not None and not self.preferred_speed > 0:
+            raise ValueError(f"preferred_speed={self.preferred_speed!r}; valid choices: None (v_pref) or a speed "
+                             "> 0 [m/s]")
 
     @classmethod
     def of(cls, owner: str, **params) -> ORCAParams:
@@ -55,6 +73,8 @@ class ORCAParams:
         unknown = sorted(set(params) - set(valid))
         if unknown:
             raise ValueError(f"{owner}: unknown argument(s) {unknown}; valid choices: {', '.join(valid)}")
+        if isinstance(params.get("neighbor_dist_range"), list):
+            params = {**params, "neighbor_dist_range": tuple(params["neighbor_dist_range"])}
         return cls(**params)
 
     def neighbors(self, num_agents: int) -> int:
@@ -81,7 +101,34 @@ class ORCABase(HumanModel):
         self._flags = np.ones((2, B, A), dtype=bool)  # active, controlled (not the robot: the world moves it)
         self._flags[1, :, 0] = False
         self._pad = p.radius_pad + p.safety_space  # added to every radius [m]
+        self._pref_speed = p.preferred_speed or 0.0  # 0: v_pref (orca_inputs)
         self._seen, self._hidden = np.zeros((B, num_humans), dtype=bool), np.ones((B, num_humans), dtype=bool)
+        self._spawns = np.zeros((B, num_humans), dtype=np.int64)  # the world's re-spawn counts at the last draw
+        self._nd_rngs: list[np.random.Generator] = [np.random.default_rng(0) for _ in range(B)]
+
+    def reset(self, worlds: np.ndarray, rngs: Sequence[np.random.Generator], state: CrowdState) -> None:
+        """New episodes in ``worlds``: with ``neighbor_dist_range``, one neighbour distance per world, shared by
+        its whole crowd (CrowdNav++'s quirk, :class:`ORCAParams`)."""
+        r = self.params.neighbor_dist_range
+        if r is None:
+            return
+        for b in worlds:  # a child stream of the world's: a subclass's own draws from rngs[b] stay as they were
+            self._nd_rngs[b] = rngs[b].spawn(1)[0]
+            self._flt[2, b] = self._nd_rngs[b].uniform(*r)
+        spawns = getattr(state, "spawns", None)
+        if spawns is not None:
+            self._spawns[worlds] = spawns[worlds]
+
+    def _redraw_respawned(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> None:
+        """A re-spawned pedestrian (its slot's ``spawns`` count changed) draws its own neighbour distance."""
+        spawns = getattr(state, "spawns", None)
+        if self.params.neighbor_dist_range is None or spawns is None:
+            return
+        new = spawns != self._spawns
+        if new.any():
+            for b, h in zip(*np.nonzero(new), strict=True):
+                self._flt[2, b, h + 1] = self._nd_rngs[b].uniform(*self.params.neighbor_dist_range)
+            self._spawns[new] = spawns[new]
 
     def robot_ignored(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         """``(B, H)`` bool: pedestrians that leave the robot out of their neighbour set this step (read-only)."""
@@ -90,13 +137,14 @@ class ORCABase(HumanModel):
     def step(self, state: CrowdState, rngs: Sequence[np.random.Generator]) -> np.ndarray:
         """ORCA velocities ``(B, H, 2)`` [m/s] in one compiled call (:func:`orca_step`: ``orca_inputs`` fills the
         agent arrays — :func:`~crowdbench.humans.preferred_velocity` toward each goal —, ``orca_batch`` solves)."""
+        self._redraw_respawned(state, rngs)
         ignore_robot = self.robot_ignored(state, rngs)
         if ignore_robot.__class__ is not np.ndarray or ignore_robot.dtype != np.bool_ \
                 or ignore_robot.shape != state.active.shape:
             ignore_robot = np.broadcast_to(np.asarray(ignore_robot, dtype=bool), state.active.shape)
         orca_step(state.robot_position, state.robot_velocity, state.robot_radius, state.positions, state.velocities,
                   state.goals, state.radii, state.v_pref, state.active, ignore_robot, self._pad, state.time_step,
-                  self._vec, self._flt, self._int, self._flags, *self._obst)
+                  self._pref_speed, self._vec, self._flt, self._int, self._flags, *self._obst)
         return self._vec[3, :, 1:]  # a view, rewritten by the next step (the world copies it); no stored view: a
         # deep copy of the model (the "truth" predictor) must not keep one into the original's memory
 

@@ -454,13 +454,16 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
 
 @nb.njit(cache=True, error_model="numpy")
 def orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active,
-                ignore_robot, pad, dt, pos, vel, pref, rad, vmax, act, ignore):  # pragma: no cover - numba
+                ignore_robot, pad, dt, pref_speed, pos, vel, pref, rad, vmax, act, ignore):  # pragma: no cover - numba
     """Fill :func:`orca_batch`'s agent arrays ``[robot, pedestrians...]`` from a crowd state, in place.
 
     Args (``B`` worlds of ``H`` pedestrians):
         robot_pos, robot_vel: ``(B, 2)``. robot_radius: ``(B,)``. positions, velocities, goals: ``(B, H, 2)``.
         radii, v_pref: ``(B, H)``. active, ignore_robot: ``(B, H)`` bool. pad: added to every radius [m].
-        dt: [s] (a goal closer than ``v_pref·dt`` is reached in one step, as ``humans.preferred_velocity``).
+        dt: [s]. pref_speed: > 0: the preferred velocity is the goal vector cut to this length [m/s] (CrowdNav++'s
+            ``crowd_nav/policy/orca.py:98-100``: a unit vector, the raw goal vector within 1 m), the speed limit
+            ``v_pref``; ≤ 0: ``v_pref`` toward the goal, a goal closer than ``v_pref·dt`` reached in one step (as
+            ``humans.preferred_velocity``).
         pos, vel, pref: Out ``(B, 1 + H, 2)``. rad, vmax: Out ``(B, 1 + H)``. act: Out bool. ignore: Out int
             (0 = leave the robot out, -1 = nobody). Row 0 (the robot) gets position, velocity, radius, activity.
 
@@ -478,7 +481,10 @@ def orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals
             dx, dy = goals[b, h, 0] - px, goals[b, h, 1] - py
             dist = np.sqrt(dx * dx + dy * dy)
             vp = v_pref[b, h]
-            scale = inv_dt if dist < vp * dt else vp / max(dist, 1e-12)
+            if pref_speed > 0:
+                scale = pref_speed / dist if dist > pref_speed else 1.0
+            else:
+                scale = inv_dt if dist < vp * dt else vp / max(dist, 1e-12)
             pref[b, h + 1, 0], pref[b, h + 1, 1] = dx * scale, dy * scale
             rad[b, h + 1], vmax[b, h + 1], act[b, h + 1] = radii[b, h] + pad, vp, active[b, h]
             ignore[b, h + 1] = 0 if ignore_robot[b, h] else -1
@@ -486,7 +492,7 @@ def orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals
 
 @nb.njit(cache=True, error_model="numpy")
 def orca_step(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active, ignore_robot,
-              pad, dt, vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex):  # pragma: no cover - numba
+              pad, dt, pref_speed, vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex):  # pragma: no cover
     """:func:`orca_inputs` then :func:`orca_batch` in one compiled call (the pedestrian model's step), on agent
     arrays packed in blocks (one argument each instead of thirteen): ``vec`` ``(4, B, A, 2)`` — positions,
     velocities, preferred velocities, out: new velocities —, ``flt`` ``(5, B, A)`` — radii, max speeds (both
@@ -495,6 +501,6 @@ def orca_step(robot_pos, robot_vel, robot_radius, positions, velocities, goals, 
     pos, vel, pref, out = vec[0], vec[1], vec[2], vec[3]
     rad, vmax, act, ignore = flt[0], flt[1], flags[0], ints[1]
     orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active, ignore_robot,
-                pad, dt, pos, vel, pref, rad, vmax, act, ignore)
+                pad, dt, pref_speed, pos, vel, pref, rad, vmax, act, ignore)
     orca_batch(pos, vel, pref, rad, vmax, flt[2], ints[0], flt[3], flt[4], act, flags[1], ignore, opoint, onext,
                oprev, odir, oconvex, dt, out)

@@ -80,6 +80,7 @@ class ResponsiveORCA(ORCABase):
         self._cursor = np.full(num_worlds, self.BLOCK, dtype=np.int64)
 
     def reset(self, worlds: np.ndarray, rngs: Sequence[np.random.Generator], state: CrowdState) -> None:
+        super().reset(worlds, rngs, state)
         lo = max(0.0, self.responsiveness - self.spread)
         hi = min(1.0, self.responsiveness + self.spread)
         for b in worlds:

@@ -3,7 +3,7 @@
 A robot policy maps a batch of robot observations to a batch of actions. It never holds or steps an environment.
 
     class MyPolicy(RobotPolicy):
-        observation = "full_state"           # which observation builder it needs
+        observation = "estimated_state"      # which observation builder it needs (its sensing tier follows)
         def act(self, obs):                  # obs: dict of (B, ...) arrays
             return np.zeros((len(obs["robot"]), 2))
 
@@ -25,7 +25,9 @@ class RobotPolicy(ABC):
     """Base class of robot policies.
 
     Class attributes:
-        observation: Name of the robot observation builder the policy consumes (``relative`` or ``full_state``).
+        observation: Name of the robot observation builder the policy consumes (``relative``, ``estimated_state``,
+            ``observed_state``, ``full_state``, …, :mod:`crowdbench.robots.observations`); it fixes the policy's
+            sensing tier (:attr:`sensing`). A policy may set it per instance (e.g. from a ``sensing`` option).
         kinematics: Robot kinematics the actions are meant for.
         stateless: A world's action depends on that world's current observation only (no memory, no batch-wide
             state), so :func:`~crowdbench.evaluation.run_episodes` asks only for the worlds still running once a
@@ -41,6 +43,13 @@ class RobotPolicy(ABC):
         if self.config.kinematics not in self.kinematics:
             raise ValueError(f"{type(self).__name__} supports kinematics {self.kinematics}, "
                              f"got {self.config.kinematics!r}")
+
+    @property
+    def sensing(self) -> str:
+        """The sensing tier of :attr:`observation` (``positions``, ``velocities`` or ``full``)."""
+        from crowdbench.robots.observations import observation_sensing
+
+        return observation_sensing(self.observation)
 
     @property
     def observation_kwargs(self) -> dict[str, Any]:

@@ -1,15 +1,27 @@
 """Observation builders (plug-ins): batched numpy from the world's state to per-agent observation dicts.
 
-Robot observations (registry :data:`OBSERVATIONS`):
+Robot observations (registry :data:`OBSERVATIONS`). Every builder belongs to one **sensing tier**
+(:data:`SENSING`), what the robot's sensor gives it; the leaderboard ranks every method at ``positions``:
 
-* ``relative`` (the paper's): ``robot`` ``(9,)`` = [px, py, r, gx, gy, v_pref, θ, vx, vy]; ``humans``
-  ``(N_max, 2)`` = (Δx, Δy) of pedestrians whose centre is within ``sensing_range``, nearest first, zero-padded;
-  ``mask`` ``(N_max,)`` = 1 for real entries. No pedestrian velocities, no responsiveness state.
-* ``full_state`` (for ORCA/SF/CADRL/SARL-style baselines): ``robot`` as above; ``humans`` ``(N_max, 5)`` =
-  (Δx, Δy, vx, vy, r) of *every* pedestrian (no range limit), nearest first; ``mask``.
-* ``relative_by_id``: ``relative`` with slot j = pedestrian j (recurrent per-pedestrian states, DS-RNN).
-* ``predicted`` (AIG-GST's, :mod:`crowdbench.predictors.observation`): ``relative`` plus each pedestrian's predicted
-  positions; stateful (it keeps the robot's track of what it has seen).
+* ``positions`` — the paper's: each step, the relative positions of the pedestrians within the sensing range
+  (CrowdNav++'s ``detect_visible``: surface distance ≤ ``sensing_range``), with their identity (who is who from one
+  step to the next), nothing else.
+* ``velocities`` — CrowdNav's observable state: plus each sensed pedestrian's true velocity and radius.
+* ``full`` — privileged (debugging): every pedestrian, any range, true velocities and radii.
+
+Builders:
+
+* ``relative`` (positions): ``robot`` ``(9,)`` = [px, py, r, gx, gy, v_pref, θ, vx, vy]; ``humans``
+  ``(N_max, 2)`` = (Δx, Δy) of the sensed pedestrians, nearest first, zero-padded; ``mask`` ``(N_max,)`` = 1 for
+  real entries.
+* ``relative_by_id`` (positions): ``relative`` with slot j = pedestrian j (recurrent per-pedestrian states, DS-RNN).
+* ``predicted`` (positions; AIG-GST's, :mod:`crowdbench.predictors.observation`): ``relative`` plus each
+  pedestrian's predicted positions; stateful (it keeps the robot's track of what it has seen).
+* ``estimated_state`` (positions): the state layout below with velocities *estimated* from the positions
+  (:class:`EstimatedStateObservation`), for methods that need velocities (ORCA, Social Force, CADRL, SARL).
+* ``observed_state`` (velocities): ``humans`` ``(N_max, 5)`` = (Δx, Δy, vx, vy, r) of the sensed pedestrians,
+  nearest first.
+* ``full_state`` (full): the same layout for *every* pedestrian (no range limit).
 
 Units: metres, m/s, radians. Arrays are float32.
 """
@@ -17,6 +29,7 @@ Units: metres, m/s, radians. Arrays are float32.
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from typing import ClassVar
 
 import numpy as np
 from gymnasium import spaces
@@ -29,10 +42,42 @@ BOUND = 1.0e5
 """Finite bound of the Box spaces [m or m/s] (parked padding slots sit at 1e4 m)."""
 
 
+SENSING = ("positions", "velocities", "full")
+"""Sensing tiers, least to most information (see the module docstring)."""
+STATE_OBSERVATIONS = {"positions": "estimated_state", "velocities": "observed_state", "full": "full_state"}
+"""The ``(Δx, Δy, vx, vy, r)`` builder of each tier, for policies that read pedestrian states."""
+
+
+def check_sensing(sensing: str, field: str = "sensing") -> str:
+    """``sensing`` if it is a tier of :data:`SENSING`, else one ``ValueError`` naming ``field`` and the tiers."""
+    if sensing not in SENSING:
+        raise ValueError(f"{field}={sensing!r}; valid choices: {', '.join(SENSING)}")
+    return sensing
+
+
+def check_tier(observation: str, allowed: str | None) -> None:
+    """A ``ValueError`` when robot observation ``observation`` needs a higher tier than ``allowed`` (None: any)."""
+    if allowed is None:
+        return
+    check_sensing(allowed)
+    need = observation_sensing(observation)
+    if SENSING.index(need) > SENSING.index(allowed):
+        raise ValueError(f"observation {observation!r} needs sensing tier {need!r}, but this environment gives "
+                         f"sensing={allowed!r}; valid choices for the policy: a tier in "
+                         f"{', '.join(SENSING[:SENSING.index(allowed) + 1])} (e.g. the policy's sensing= option)")
+
+
+def observation_sensing(observation: str) -> str:
+    """The sensing tier of robot observation builder ``observation`` (a registry name)."""
+    return OBSERVATIONS.get(observation).sensing
+
+
 class Observation(ABC):
     """Robot observation builder. ``build`` returns a dict of float32 arrays with leading dimension ``B``."""
 
     name: str = ""
+    sensing: ClassVar[str] = "positions"
+    """The sensing tier (:data:`SENSING`) of what :meth:`build` reveals."""
 
     def __init__(self, config: WorldConfig) -> None:
         self.config = config
@@ -113,9 +158,10 @@ class RelativeByIdObservation(RelativeObservation):
 
 @OBSERVATIONS.register("full_state")
 class FullStateObservation(Observation):
-    """Full observability: every pedestrian's relative position, velocity and radius."""
+    """Full observability (tier ``full``): every pedestrian's relative position, velocity and radius."""
 
     name = "full_state"
+    sensing = "full"
 
     def space(self) -> spaces.Dict:
         n = self.config.max_humans_observed
@@ -128,6 +174,73 @@ class FullStateObservation(Observation):
     def kernel_spec(self) -> tuple[int, float, int, bool]:
         """See :meth:`RelativeObservation.kernel_spec`."""
         return 5, np.inf, self.config.max_humans_observed, False
+
+
+@OBSERVATIONS.register("observed_state")
+class ObservedStateObservation(FullStateObservation):
+    """Tier ``velocities`` (CrowdNav's observable state): (Δx, Δy, vx, vy, r) of the pedestrians within the sensing
+    range, nearest first — true velocities and radii."""
+
+    name = "observed_state"
+    sensing = "velocities"
+
+    def kernel_spec(self) -> tuple[int, float, int, bool]:
+        """See :meth:`RelativeObservation.kernel_spec`."""
+        return 5, self.config.sensing_range, self.config.max_humans_observed, False
+
+
+@OBSERVATIONS.register("estimated_state")
+class EstimatedStateObservation(Observation):
+    """Tier ``positions`` for methods that need pedestrian states: the ``full_state`` layout (Δx, Δy, v̂x, v̂y, r̂)
+    of the pedestrians within the sensing range, nearest first, built from what ``relative_by_id`` gives.
+
+    * **Velocity estimator**: the finite difference of a pedestrian's last two sightings on consecutive steps,
+      v̂ = (p_t − p_{t−1}) / dt (world frame; the robot knows its own position). A pedestrian seen for the first
+      time — or again after a gap, or a slot whose person was re-spawned — has no velocity yet: v̂ = 0.
+    * **Radius**: not sensed; every pedestrian is given r̂ = the largest radius the world's configuration allows
+      (``human_radius_range[1]``, else ``human_radius``) — a conservative prior, not a measurement.
+
+    Stateful (it keeps the last sightings), so one builder serves one batch of worlds; a world whose step counter
+    restarts (a new episode) starts with no sightings.
+    """
+
+    name = "estimated_state"
+    sensing = "positions"
+
+    def __init__(self, config: WorldConfig) -> None:
+        super().__init__(config)
+        rr = config.human_radius_range
+        self.assumed_radius = float(rr[1] if rr is not None else config.human_radius)
+        self._last: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+
+    def space(self) -> spaces.Dict:
+        n = self.config.max_humans_observed
+        return spaces.Dict({"robot": _robot_box(), "humans": spaces.Box(-BOUND, BOUND, (n, 5), np.float32),
+                            "mask": spaces.Box(0.0, 1.0, (n,), np.float32)})
+
+    def build(self, world) -> dict[str, np.ndarray]:
+        B, H, n = world.num_worlds, world.num_humans, self.config.max_humans_observed
+        obs = _build(world, 2, self.config.sensing_range, H, by_id=True)
+        seen = obs["mask"] > 0.5  # (B, H)
+        pos = obs["humans"].astype(np.float64) + world.pos[:, None, 0]  # world frame (B, H, 2)
+        spawns, steps = world.spawns[:, 1:], world.steps
+        vel = np.zeros((B, H, 2))
+        last = self._last
+        if last is not None and last[0].shape == pos.shape:
+            p0, seen0, spawns0, steps0 = last
+            ok = seen & seen0 & (spawns == spawns0) & (steps == steps0 + 1)[:, None]
+            vel = np.where(ok[..., None], (pos - p0) / world.dt, 0.0)
+        self._last = (pos, seen, spawns.copy(), steps.copy())
+        dist = np.where(seen, np.hypot(obs["humans"][..., 0], obs["humans"][..., 1]), np.inf)
+        k = min(n, H)
+        order = np.argsort(dist, axis=1, kind="stable")[:, :k]
+        humans = np.zeros((B, n, 5), np.float32)
+        mask = np.zeros((B, n), np.float32)
+        mask[:, :k] = np.take_along_axis(seen, order, 1)
+        feats = np.concatenate([obs["humans"], vel.astype(np.float32),
+                                np.full((B, H, 1), self.assumed_radius, np.float32)], -1)
+        humans[:, :k] = np.where(mask[:, :k, None] > 0.5, np.take_along_axis(feats, order[..., None], 1), 0.0)
+        return {"robot": obs["robot"], "humans": humans, "mask": mask}
 
 
 def human_observation_space(config: WorldConfig) -> spaces.Dict:
@@ -167,7 +280,7 @@ def agent_observations(builder: Observation, world) -> tuple[dict[str, np.ndarra
     return {"robot": robot, "humans": humans, "mask": mask}, {"self": me, "neighbors": nb, "mask": hmask}
 
 
-_COMPILED_BUILDS = (RelativeObservation.build, FullStateObservation.build)
+_COMPILED_BUILDS = (RelativeObservation.build, FullStateObservation.build)  # ObservedState inherits the latter
 
 OBSERVATIONS.register("predicted", "crowdbench.predictors.observation:PredictedObservation")
 

@@ -35,6 +35,7 @@ from crowdbench.training.plots import plot_curve
 from crowdbench.training.ppo import SharedTrunkPPO, gaussian_std
 from crowdbench.training.rollout import PolicySnapshot, collect, snapshot_builder
 from crowdbench.training.vecenv import CrowdVecEnv
+from crowdbench.worlds.digest import crowd_digest
 
 
 def rsl_cfg(cfg: TrainConfig, method: PPOMethod) -> dict[str, Any]:
@@ -89,7 +90,7 @@ class Trainer:
     def checkpoint(self) -> dict[str, Any]:
         return {
             "format": checkpoints.FORMAT, "method": self.cfg.method, "crowdbench_version": __version__,
-            "model": self.cfg.to_dict()["model"], "n_max": self.env.config.max_humans_observed,
+            "crowd": crowd_digest(), "model": self.cfg.to_dict()["model"], "n_max": self.env.config.max_humans_observed,
             "seed": self.cfg.seed, "train_config": self.cfg.to_dict(),
             "iteration": self.iteration, "env_steps": self.env_steps, "elapsed_s": self.elapsed,
             "actor": self.alg.actor.state_dict(), "critic": self.alg.critic.state_dict(),

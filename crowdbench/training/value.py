@@ -162,6 +162,9 @@ class ValueTrainConfig:
     """Wall-clock budget (0 = none); the run stops at the first round boundary past it."""
     threads: int = 1
     """torch threads."""
+    sensing: str = "positions"
+    """Sensing tier the value network trains and acts at (``positions``: velocities estimated from positions;
+    ``velocities``: true velocities and radii), the ORCA demonstrator's included."""
     free_space: bool = False
     """Value states with nobody sensed analytically, in the look-ahead and in the TD targets
     (:func:`~crowdbench.policies.value.lookahead.free_space_value`). Off: a CADRL run with it (seed 0, 10,000 TD
@@ -174,6 +177,9 @@ class ValueTrainConfig:
 
         if not isinstance(self.free_space, bool):
             raise ValueError(f"free_space={self.free_space!r}; valid choices: true, false")
+        from crowdbench.robots.observations import check_sensing
+
+        check_sensing(self.sensing)
 
         if self.method not in VALUE_METHODS:
             raise ValueError(f"method={self.method!r}; valid choices: {', '.join(VALUE_METHODS)}")
@@ -255,10 +261,12 @@ class ValueTrainer:
         self.target = copy.deepcopy(self.net)
         self.config = make_config(humans_range=cfg.humans_range)
         policy_cls = CADRLPolicy if cfg.method == "cadrl" else SARLPolicy
-        self.policy = policy_cls(self.config, net=self.net, gamma=cfg.gamma, free_space=cfg.free_space)
-        self.demonstrator = ORCAPolicy(self.config)  # CrowdNav's il_policy: ORCA, safety space 0.15 m
+        self.policy = policy_cls(self.config, net=self.net, gamma=cfg.gamma, free_space=cfg.free_space,
+                                 sensing=cfg.sensing)
+        # CrowdNav's il_policy: ORCA, safety space 0.15 m, sensing what the learner senses
+        self.demonstrator = ORCAPolicy(self.config, sensing=cfg.sensing)
         self.world = CrowdWorld(self.config, cfg.worlds, "circle_crossing", "responsive_orca")
-        self.obs = make_observation("full_state", self.config)
+        self.obs = make_observation(self.policy.observation, self.config)
         n = self.config.max_humans_observed
         self.memory = ReplayMemory(cfg.capacity, {"state": (n, 13), "mask": (n,), "value": ()})
         self.rng = np.random.default_rng(cfg.seed)
@@ -501,9 +509,11 @@ class ValueTrainer:
     def policy_checkpoint(self) -> dict[str, Any]:
         """What is shipped: the network, its architecture, the discount and where it came from."""
         from crowdbench import __version__, checkpoints
+        from crowdbench.worlds.digest import crowd_digest
 
         return {"format": checkpoints.FORMAT, "method": self.cfg.method, "crowdbench_version": __version__,
-                "model": dict(self.cfg.model), "gamma": self.cfg.gamma, "free_space": self.cfg.free_space,
+                "crowd": crowd_digest(), "sensing": self.cfg.sensing, "model": dict(self.cfg.model),
+                "gamma": self.cfg.gamma, "free_space": self.cfg.free_space,
                 "n_max": self.config.max_humans_observed,
                 "seed": self.cfg.seed, "phase": self.phase, "episodes": self.episode, "elapsed_s": self.elapsed,
                 "train_config": self.cfg.to_dict(), "net": self.net.state_dict()}

@@ -13,6 +13,8 @@ it bit for bit (``tests/worlds/test_kernels.py``):
   (reference: ``reference.robot_observation`` / ``reference.human_observation``); both at once for one world:
   :func:`one_world_observations`;
 * :func:`first_clear` — the first re-spawn candidate clear of everyone (reference: ``reference.first_clear``).
+* :func:`spawn_clear`, :func:`change_goals` — CrowdNav++'s spawn and goal-change clearance (reference:
+  ``reference.spawn_clear``).
 
 Why compiled: a world step of a small crowd is a few hundred numpy calls on arrays of a handful of elements, so
 per-call overhead (≈ 1 µs each) dominated; each kernel here costs one dispatch (≈ 1–3 µs) plus its arithmetic.
@@ -255,7 +257,9 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
 
     Args (``B`` worlds of ``A`` agents, ``n`` observed slots):
         pos, vel, goal: ``(B, A, 2)``. radius, v_pref, heading: ``(B, A)``. active: ``(B, A)`` bool.
-        max_range: Pedestrians whose centre is farther [m] are left out (``inf``: none).
+        max_range: Sensing range [m]: pedestrians whose surface distance to the robot (centre distance minus both
+            radii, CrowdNav++'s ``detect_visible``, ``crowd_sim.py:547-550``) exceeds it are left out (``inf``:
+            none). Nearest first sorts by centre distance.
         by_id: Slot ``j`` holds pedestrian ``j`` (zero and masked when left out) instead of the nearest-first order.
         robot: Out ``(B, 9)`` float32 = [px, py, r, gx, gy, v_pref, θ, vx, vy].
         humans: Out ``(B, n, F)`` float32: F = 2 (Δx, Δy) or 5 (Δx, Δy, vx, vy, r), nearest first (ties by index)
@@ -275,7 +279,7 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
         for h in range(1, A):
             dx, dy = pos[b, h, 0] - pos[b, 0, 0], pos[b, h, 1] - pos[b, 0, 1]
             d = math.sqrt(dx * dx + dy * dy)
-            if active[b, h] and d <= max_range:
+            if active[b, h] and d - radius[b, h] - radius[b, 0] <= max_range:
                 if by_id:
                     if h <= n:
                         idx[count], count = h, count + 1
@@ -347,20 +351,53 @@ def one_world_observations(pos, vel, goal, radius, v_pref, heading, active, max_
 
 
 @nb.njit(cache=True, error_model="numpy")
-def first_clear(starts, pos, radius, active, agent, gap):  # pragma: no cover - numba
-    """Index of the first candidate start ``(m, 2)`` whose centre distance to every other active agent of the world
-    (``pos`` ``(A, 2)``, ``radius`` ``(A,)``, ``active`` ``(A,)``) is at least both radii + ``gap`` [m], where
-    ``agent`` is the one being placed; ``m - 1`` if none is (re-spawning pedestrians, ``CrowdWorld._respawn``)."""
-    m, A = starts.shape[0], radius.shape[0]
+def spawn_clear(cands, pos, goal, radius, active, skip, r_new, gap, with_goals):  # pragma: no cover - numba
+    """Index of the first candidate point ``cands`` ``(m, 2)`` at least ``r_new + radius[j] + gap`` [m] from every
+    active agent ``j != skip`` of one world (``pos``, ``goal`` ``(A, 2)``, ``radius`` ``(A,)``, ``active``
+    ``(A,)``): from its position and, with ``with_goals``, from its goal too (CrowdNav++'s spawn and goal-change
+    test, ``crowd_sim_var_num.py:131-140``, ``crowd_sim.py:437-444``); ``-1`` if no candidate is clear."""
+    m, A = cands.shape[0], radius.shape[0]
     for k in range(m):
         clear = True
         for j in range(A):
-            if j == agent or not active[j]:
+            if j == skip or not active[j]:
                 continue
-            dx, dy = starts[k, 0] - pos[j, 0], starts[k, 1] - pos[j, 1]
-            if not math.sqrt(dx * dx + dy * dy) >= radius[agent] + radius[j] + gap:
+            need = r_new + radius[j] + gap
+            dx, dy = cands[k, 0] - pos[j, 0], cands[k, 1] - pos[j, 1]
+            if not math.sqrt(dx * dx + dy * dy) >= need:
                 clear = False
                 break
+            if with_goals:
+                dx, dy = cands[k, 0] - goal[j, 0], cands[k, 1] - goal[j, 1]
+                if not math.sqrt(dx * dx + dy * dy) >= need:
+                    clear = False
+                    break
         if clear:
             return k
-    return m - 1
+    return -1
+
+
+@nb.njit(cache=True, error_model="numpy")
+def first_clear(starts, pos, radius, active, agent, gap):  # pragma: no cover - numba
+    """Index of the first candidate start ``(m, 2)`` whose centre distance to every other active agent of the world
+    (``pos`` ``(A, 2)``, ``radius`` ``(A,)``, ``active`` ``(A,)``) is at least both radii + ``gap`` [m], where
+    ``agent`` is the one being placed; ``m - 1`` if none is (the calibrated crowd's re-spawn,
+    ``CrowdWorld._respawn``)."""
+    k = spawn_clear(starts, pos, pos, radius, active, agent, radius[agent], gap, False)
+    return starts.shape[0] - 1 if k < 0 else k
+
+
+@nb.njit(cache=True, error_model="numpy")
+def change_goals(cands, slots, pos, goal, radius, active, gap):  # pragma: no cover - numba
+    """CrowdNav++'s random goal change of one world (``crowd_sim.py:415-450``), in place: agent ``slots[i]`` takes
+    the first of its candidate goals ``cands[i]`` ``(m, 2)`` that is :func:`spawn_clear` of every other active agent's
+    position and goal, in slot order (a later agent is checked against the new goals of earlier ones); an agent with
+    no clear candidate keeps its goal. Returns how many goals changed."""
+    changed = 0
+    for i in range(slots.shape[0]):
+        a = slots[i]
+        k = spawn_clear(cands[i], pos, goal, radius, active, a, radius[a], gap, True)
+        if k >= 0:
+            goal[a, 0], goal[a, 1] = cands[i, k, 0], cands[i, k, 1]
+            changed += 1
+    return changed

@@ -119,6 +119,18 @@ class Layout(ABC):
     respawn: bool = False
     """Whether a pedestrian reaching its goal is re-spawned (:meth:`respawn_candidates`) instead of getting a new
     goal."""
+    spawn_gap: float | None = None
+    """``None``: a re-spawn takes the first of 16 candidates clear of the others' positions by both radii +
+    :data:`PLACEMENT_GAP`, else the last. A number [m]: CrowdNav++'s rule — clear of every agent's position *and*
+    goal by both radii + ``spawn_gap``, and with no clear candidate the re-spawn waits a step (never an overlap)."""
+    spawn_candidates: int = 16
+    """Candidates drawn per re-spawn (and per goal change, with :meth:`goal_candidates`) per step [-]."""
+
+    def goal_candidates(self, rng: np.random.Generator, v_pref: np.ndarray, m: int) -> np.ndarray | None:
+        """Optional: ``m`` candidate goals ``(k, m, 2)`` [m] of a random goal change for ``k`` pedestrians of preferred
+        speeds ``v_pref`` ``(k,)``, checked for clearance like a CrowdNav++ spawn (needs :attr:`spawn_gap`). ``None``
+        (default): goal changes use :meth:`changed_goals` unchecked."""
+        return None
 
     def respawn_candidates(self, rng: np.random.Generator, m: int) -> tuple[np.ndarray, np.ndarray]:
         """``m`` candidate (start, goal) pairs for a re-spawned pedestrian (default: :meth:`candidates`)."""
@@ -225,27 +237,118 @@ def place_without_overlap(
 ARRIVALS = ("turn", "respawn")
 
 
+CROWDNAV_GAP = 0.25
+"""CrowdNav++'s placement clearance beyond both radii: ``discomfort_dist`` (``configs/config.py:34``) [m]."""
+
+
 @register("circle_crossing")
 class CircleCrossing(Layout):
-    """Training layout: pedestrians cross a circle through its centre; by default as in CrowdNav++.
+    """The default training layout: CrowdNav++'s circle crossing, rule for rule (Shuijing725/
+    CrowdNav_Prediction_AttnGraph @3907731; ``docs/benchmark.md`` lists every rule and each departure).
 
-    Pedestrians start on a circle of radius ``radius`` centred at the origin, each coordinate perturbed by
-    U(−noise, noise); goals are antipodal (``goal = −start``). ``arrival="respawn"``: a pedestrian reaching its goal
-    is replaced by a new one at a fresh circle start (CrowdNav++); ``"turn"``: it is sent to a new point on the circle
-    at a uniformly random angle within ±45° of the antipode of where it stands. Random goal changes
-    (``goal_change_interval``, ``goal_change_prob``) pick a uniform point on the circle, each coordinate perturbed by
-    U(−v/2, v/2) with v = 1 m/s (CrowdNav++). The robot: see :attr:`Layout.robot`.
+    * **Start** (``crowd_sim_var_num.py:121-128``): a uniform angle θ on the circle of radius ``radius`` (6√2 m,
+      ``configs/config.py:40``), each coordinate plus a one-sided U[0, ``noise``) (``noise_range = 2``); the
+      **goal** is ``−start`` (line 144), never checked.
+    * **Clearance** (lines 129-140): a start is accepted when it is at least ``r_new + r_j + 0.25`` m
+      (:data:`CROWDNAV_GAP`, ``discomfort_dist``) from every agent already placed — robot included — both from its
+      position and from its goal. CrowdNav++ loops until one is found; here the draw is bounded
+      (:meth:`sample`: 48 pools of 32 candidates per pedestrian, then ``ValueError``).
+    * **Arrival** (``crowd_sim_pred.py:206-211``): a pedestrian within its own radius of its goal is re-spawned —
+      new radius and speed, a fresh start by the same rule, checked against everyone including its old self —
+      (:attr:`respawn`); with no clear candidate among :attr:`spawn_candidates` the re-spawn **waits** (the
+      pedestrian stays at its goal) and is tried again the next step, so no spawn ever overlaps.
+    * **Random goal changes** (``crowd_sim_pred.py:201-204``, ``crowd_sim.py:415-450``): every 5 s each pedestrian
+      with probability 0.5 takes a goal at a uniform angle on the circle plus a symmetric U[−v_pref/2, v_pref/2)
+      per coordinate, checked like a start against every other agent's position and goal (later pedestrians
+      against the earlier ones' new goals); with no clear candidate among :attr:`spawn_candidates` it keeps its
+      goal.
+    * **Robot** (``crowd_sim_var_num.py:95-101``): start and goal uniform in [−6, 6]², at least 8 m apart, drawn
+      before the pedestrians (:meth:`Layout.robot_endpoints`).
 
     Args:
-        radius: Circle radius [m] (CrowdNav++: 6√2 ≈ 8.49; ``legacy`` geometry: 6).
-        noise: Half-width of the start noise per coordinate [m] (CrowdNav++ adds U(0, 2), one-sided — the same
-            spread shifted by +1 m; symmetric here so the crowd stays centred).
+        radius: Circle radius [m]. noise: Width of the one-sided start noise per coordinate [m].
+        robot, robot_area, robot_min_distance: The robot's start/goal rule (:meth:`Layout.configure_robot`).
+        goal_change_interval, goal_change_prob: Random goal changes [s], [-] (0 = never).
+    """
+
+    name = "circle_crossing"
+    respawn = True
+    spawn_gap: float = CROWDNAV_GAP
+    spawn_candidates: int = 16
+    """Candidates tried per re-spawn or goal change per step (CrowdNav++ retries without bound)."""
+
+    def __init__(self, radius: float = 6 * math.sqrt(2), noise: float = 2.0, robot: str = "random",
+                 robot_area: float = 6.0, robot_min_distance: float = 8.0, goal_change_interval: float = 5.0,
+                 goal_change_prob: float = 0.5) -> None:
+        if not radius > 0 or noise < 0:
+            raise ValueError(f"radius={radius}, noise={noise}; valid choices: radius > 0 [m], noise ≥ 0 [m]")
+        self.radius, self.noise = float(radius), float(noise)
+        self.configure_robot(robot, robot_area, robot_min_distance)
+        self.configure_goal_changes(goal_change_interval, goal_change_prob)
+        self.half_size = max(radius + noise, robot_area) + 1.0
+
+    def candidates(self, rng, index, n, m):
+        ang = rng.uniform(0.0, 2 * math.pi, m)
+        s = self.radius * np.stack([np.cos(ang), np.sin(ang)], 1) + rng.uniform(0.0, self.noise, (m, 2))
+        return s, -s
+
+    def renew_goals(self, u, positions, goals):  # arrivals re-spawn (see respawn)
+        raise NotImplementedError("circle_crossing re-spawns arriving pedestrians")
+
+    def goal_candidates(self, rng: np.random.Generator, v_pref: np.ndarray, m: int) -> np.ndarray:
+        """``m`` candidate goals ``(k, m, 2)`` [m] of a random goal change for ``k`` pedestrians of preferred speeds
+        ``v_pref`` ``(k,)`` [m/s] (``crowd_sim.py:427-432``)."""
+        k = len(v_pref)
+        ang = rng.uniform(0.0, 2 * math.pi, (k, m))
+        noise = (rng.random((k, m, 2)) - 0.5) * v_pref[:, None, None]
+        return self.radius * np.stack([np.cos(ang), np.sin(ang)], -1) + noise
+
+    def sample(self, rng, n, human_radius, robot_radius, obstacles=(), robot_points=None):
+        """CrowdNav++'s placement (class docstring), bounded: returns ``(starts, goals)``, each ``(n, 2)`` [m]."""
+        from crowdbench.worlds._kernels import spawn_clear
+
+        radii = np.broadcast_to(np.asarray(human_radius, dtype=np.float64), (n,))
+        robot_pts = (np.array([self.robot_start, self.robot_goal], dtype=np.float64) if robot_points is None
+                     else np.ascontiguousarray(robot_points, dtype=np.float64))
+        # agents placed so far: row 0 the robot (position = its start, goal = its goal), then the pedestrians
+        pos, goal = np.zeros((n + 1, 2)), np.zeros((n + 1, 2))
+        rad, active = np.zeros(n + 1), np.zeros(n + 1, dtype=bool)
+        pos[0], goal[0], rad[0], active[0] = robot_pts[0], robot_pts[1], robot_radius, True
+        for i in range(n):
+            for _ in range(48):
+                s, _g = self.candidates(rng, i, n, 32)
+                k = spawn_clear(np.ascontiguousarray(s), pos, goal, rad, active, -1, radii[i], self.spawn_gap, True)
+                if k >= 0:
+                    pos[i + 1], goal[i + 1], rad[i + 1], active[i + 1] = s[k], -s[k], radii[i], True
+                    break
+            else:
+                raise ValueError(f"layout {self.name!r} cannot fit num_humans={n} pedestrians of radius up to "
+                                 f"{radii.max()} m: pedestrian {i} found no clear start in {48 * 32} candidates; "
+                                 "lower num_humans")
+        self.spacing = 2 * float(radii.mean()) + self.spawn_gap if n else self.spacing
+        return pos[1:].copy(), goal[1:].copy()
+
+
+@register("circle_crossing_calibrated")
+class CircleCrossingCalibrated(Layout):
+    """crowdbench 0.2's default circle crossing, kept for comparison (its rules were chosen by fitting the paper's
+    ORCA row; see ``docs/benchmark.md``). Pedestrians start on a circle of radius ``radius`` centred at the origin,
+    each coordinate perturbed by U(−noise, noise); goals are antipodal (``goal = −start``); placement clearance
+    0.2 m between starts and between goals (:func:`place_without_overlap`). ``arrival="respawn"``: a pedestrian
+    reaching its goal is replaced by a new one at the first of 16 fresh circle starts clear of the others' positions
+    (else the last candidate); ``"turn"``: it is sent to a new point on the circle at a uniformly random angle
+    within ±45° of the antipode of where it stands. Random goal changes pick a uniform point on the circle, each
+    coordinate perturbed by U(−1/2, 1/2) m. Its pedestrians walked at their own preferred speed: pair it with
+    ``human_model_kwargs={"preferred_speed": None, "neighbor_dist_range": None}`` for the whole former crowd.
+
+    Args:
+        radius: Circle radius [m]. noise: Half-width of the start noise per coordinate [m].
         arrival: ``respawn`` or ``turn``.
         robot, robot_area, robot_min_distance: The robot's start/goal rule (:meth:`Layout.configure_robot`).
         goal_change_interval, goal_change_prob: Random goal changes [s], [-].
     """
 
-    name = "circle_crossing"
+    name = "circle_crossing_calibrated"
 
     def __init__(self, radius: float = 6 * math.sqrt(2), noise: float = 1.0, arrival: str = "respawn",
                  robot: str = "random", robot_area: float = 6.0, robot_min_distance: float = 8.0,
@@ -277,8 +380,8 @@ class CircleCrossing(Layout):
 
 
 @register("circle_crossing_legacy")
-class CircleCrossingLegacy(CircleCrossing):
-    """crowdbench ≤ 0.2's circle crossing, kept for comparison: circle radius 6 m, noise ±0.5 m, the robot always
+class CircleCrossingLegacy(CircleCrossingCalibrated):
+    """crowdbench's original circle crossing, kept for comparison: circle radius 6 m, noise ±0.5 m, the robot always
     from (0, −6) to (0, 6) on the pedestrians' own ring, pedestrians turn round near the antipode on arrival, no
     random goal changes. A learned policy can memorise one route here (see ``leaderboards/README.md``)."""
 

@@ -101,7 +101,8 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
     robot[:] = np.concatenate([pos[:, 0], radius[:, :1], goal[:, 0], v_pref[:, :1], heading[:, :1], vel[:, 0]], 1)
     rel = pos[:, 1:] - pos[:, :1]
     dist = norm(rel)
-    key = np.where(active[:, 1:] & (dist <= max_range), dist, np.inf)
+    surface = dist - radius[:, 1:] - radius[:, :1]
+    key = np.where(active[:, 1:] & (surface <= max_range), dist, np.inf)
     B, H = key.shape
     k = min(humans.shape[1], H)
     order = np.broadcast_to(np.arange(k), (B, k)) if by_id else np.argsort(key, axis=1, kind="stable")[:, :k]
@@ -147,3 +148,16 @@ def first_clear(starts, pos, radius, active, agent, gap) -> int:
     d = np.linalg.norm(starts[:, None] - pos[others][None], axis=-1)
     ok = np.flatnonzero((d >= need).all(axis=1))
     return int(ok[0]) if len(ok) else len(starts) - 1
+
+
+def spawn_clear(cands, pos, goal, radius, active, skip, r_new, gap, with_goals) -> int:
+    """See :func:`crowdbench.worlds._kernels.spawn_clear`."""
+    others = active.copy()
+    if skip >= 0:
+        others[skip] = False
+    need = r_new + radius[others] + gap
+    ok = (np.linalg.norm(cands[:, None] - pos[others][None], axis=-1) >= need).all(axis=1)
+    if with_goals:
+        ok &= (np.linalg.norm(cands[:, None] - goal[others][None], axis=-1) >= need).all(axis=1)
+    hits = np.flatnonzero(ok)
+    return int(hits[0]) if len(hits) else -1

@@ -28,7 +28,7 @@ import pymunk
 from crowdbench.config import WorldConfig
 from crowdbench.geometry import norm, obstacle_edges
 from crowdbench.humans.base import CrowdState, HumanModel, PedestrianModelError, make
-from crowdbench.worlds._kernels import advance, first_clear
+from crowdbench.worlds._kernels import advance, change_goals, first_clear, spawn_clear
 from crowdbench.worlds.layouts import Layout, make_layout
 from crowdbench.worlds.physics import PymunkWorlds
 from crowdbench.worlds.reference import clip_norm
@@ -162,6 +162,9 @@ class CrowdWorld:
         self.v_pref[:, 0] = config.robot_v_pref
         self.heading = np.zeros((B, A))
         self.active = np.zeros((B, A), dtype=bool)
+        self.spawns = np.zeros((B, A), dtype=np.int64)
+        """``(B, A)``: how many times each agent slot was re-spawned this episode — a slot's occupant is a new person
+        whenever its count changes (identity for trackers and per-person model state)."""
         self.steps = np.zeros(B, dtype=np.int64)
         self.prev_goal_dist = np.zeros(B)
         self.rngs: list[np.random.Generator] = [np.random.default_rng(0) for _ in range(B)]
@@ -217,7 +220,8 @@ class CrowdWorld:
             positions=self.pos[:, 1:], velocities=self.vel[:, 1:], goals=self.goal[:, 1:], radii=self.radius[:, 1:],
             v_pref=self.v_pref[:, 1:], headings=self.heading[:, 1:], active=self.active[:, 1:],
             robot_position=self.pos[:, 0], robot_velocity=self.vel[:, 0], robot_radius=self.radius[:, 0],
-            robot_visible=self.config.robot_visible, obstacles=self.obstacles, edges=self.edges, time_step=self.dt)
+            robot_visible=self.config.robot_visible, obstacles=self.obstacles, edges=self.edges, time_step=self.dt,
+            spawns=self.spawns[:, 1:])
 
     def goal_distance(self) -> np.ndarray:
         """Robot centre to goal ``(B,)`` [m]."""
@@ -259,6 +263,7 @@ class CrowdWorld:
         d = self.goal[idx] - self.pos[idx]
         self.heading[idx] = np.arctan2(d[..., 1], d[..., 0])
         self.vel[idx] = 0.0
+        self.spawns[idx] = 0
         self.steps[idx] = 0
         self.prev_goal_dist[idx] = self.goal_distance()[idx]
         self.physics.set_positions(idx, self.pos[idx])
@@ -346,10 +351,12 @@ class CrowdWorld:
         if events < 0:
             raise self._non_finite(human_override)
         self.physics.sync()  # the kernel wrote the positions into its rows
+        if events & 2:  # CrowdNav++'s order: goal changes, then arrivals (crowd_sim_pred.py:201-211)
+            self._change_goals(np.flatnonzero(self._change_due))
+            if events & 1:  # a changed goal may end an arrival
+                self._reached &= self._within_goal()
         if events & 1:
             self._renew_goals(self._reached)
-        if events & 2:
-            self._change_goals(np.flatnonzero(self._change_due))
         return StepResult(floats, ints, flags)
 
     def _human_velocities(self, state: CrowdState) -> np.ndarray:
@@ -381,6 +388,8 @@ class CrowdWorld:
         rule (vectorised over worlds; the uniforms come from each world's own generator, one call per world that
         needs any)."""
         bi, hi = np.nonzero(reached)  # sorted by world, then pedestrian
+        if not len(bi):
+            return
         if self.layout.respawn:
             self._respawn(bi, hi + 1)
             return
@@ -393,26 +402,65 @@ class CrowdWorld:
         self.goal[bi, hi + 1] = self.layout.renew_goals(u, self.pos[bi, hi + 1], self.goal[bi, hi + 1])
 
 
+    def _within_goal(self) -> np.ndarray:
+        """``(B, H)`` bool: active pedestrians within their own radius of their goal (the arrival test)."""
+        d = self.goal[:, 1:] - self.pos[:, 1:]
+        return self.active[:, 1:] & (d[..., 0] ** 2 + d[..., 1] ** 2 <= self.radius[:, 1:] ** 2)
+
     def _respawn(self, bi: np.ndarray, ai: np.ndarray) -> None:
         """Replace agents ``ai`` of worlds ``bi`` (pedestrians that reached their goal) by new ones at a fresh start
-        of the layout (CrowdNav++): the first of 16 candidates clear of every other active agent by both radii +
-        :data:`~crowdbench.worlds.layouts.PLACEMENT_GAP` (else the last candidate), new attributes if drawn, at
-        rest. The slot's pedestrian-model state (e.g. its responsiveness) carries over."""
+        of the layout, with new attributes if drawn, at rest; their :attr:`spawns` count goes up. The layout's
+        :attr:`~crowdbench.worlds.layouts.Layout.spawn_gap` sets the rule: CrowdNav++'s (the first of
+        ``spawn_candidates`` candidates clear of every agent's position and goal — the leaving pedestrian's
+        included — by both radii + the gap, else the re-spawn waits a step: the pedestrian stays at its goal), or
+        the calibrated crowd's (clear of the others' positions by both radii +
+        :data:`~crowdbench.worlds.layouts.PLACEMENT_GAP`, else the last candidate). The slot's pedestrian-model
+        state (e.g. its responsiveness) carries over."""
         from crowdbench.worlds.layouts import PLACEMENT_GAP
 
+        lay, cfg = self.layout, self.config
+        gap, m = lay.spawn_gap, lay.spawn_candidates
         for b in (bi[:1] if bi[0] == bi[-1] else np.unique(bi)):
             rng = self.rngs[b]
             for a in ai[bi == b]:
-                self._draw_attributes(b, rng, int(a))
-                s, g = self.layout.respawn_candidates(rng, 16)
-                k = first_clear(s, self.pos[b], self.radius[b], self.active[b], a, PLACEMENT_GAP)
+                a = int(a)
+                r_new = rng.uniform(*cfg.human_radius_range) if cfg.human_radius_range is not None else None
+                v_new = rng.uniform(*cfg.human_v_pref_range) if cfg.human_v_pref_range is not None else None
+                s, g = lay.respawn_candidates(rng, m)
+                s = np.ascontiguousarray(s, dtype=np.float64)
+                r = self.radius[b, a] if r_new is None else r_new
+                if gap is None:
+                    self.radius[b, a] = r
+                    k = first_clear(s, self.pos[b], self.radius[b], self.active[b], a, PLACEMENT_GAP)
+                else:
+                    k = spawn_clear(s, self.pos[b], self.goal[b], self.radius[b], self.active[b], -1, r, gap, True)
+                    if k < 0:
+                        continue  # no room: the re-spawn waits (tried again next step)
+                    self.radius[b, a] = r
+                if r_new is not None:
+                    self.physics.set_radii(b, self.radius[b], a)
+                if v_new is not None:
+                    self.v_pref[b, a] = v_new if cfg.human_speed_cap is None else min(v_new, cfg.human_speed_cap)
                 self.pos[b, a], self.goal[b, a], self.vel[b, a] = s[k], g[k], 0.0
+                self.spawns[b, a] += 1
             self.physics.set_positions(np.array([b]), self.pos[b][None])
 
     def _change_goals(self, worlds: np.ndarray) -> None:
         """Random goal changes in ``worlds`` (their episode step is a multiple of the layout's interval): each active
-        pedestrian takes a new goal (:meth:`Layout.changed_goals`) with the layout's probability."""
-        m, p = self.layout.renew_uniforms, self.layout.goal_change_prob
+        pedestrian takes a new goal with the layout's probability — checked for clearance and kept when none is
+        clear (:meth:`Layout.goal_candidates`, CrowdNav++), or :meth:`Layout.changed_goals` unchecked."""
+        m, p, lay = self.layout.renew_uniforms, self.layout.goal_change_prob, self.layout
+        if lay.spawn_gap is not None and type(lay).goal_candidates is not Layout.goal_candidates:
+            for b in worlds.tolist():
+                rng = self.rngs[b]
+                slots = np.flatnonzero(self.active[b, 1:]) + 1
+                change = slots[rng.random(len(slots)) <= p]  # CrowdNav++: random() <= goal_change_chance
+                if len(change):
+                    cands = np.ascontiguousarray(lay.goal_candidates(rng, self.v_pref[b, change],
+                                                                     lay.spawn_candidates))
+                    change_goals(cands, change, self.pos[b], self.goal[b], self.radius[b], self.active[b],
+                                 lay.spawn_gap)
+            return
         for b in worlds.tolist():
             slots = np.flatnonzero(self.active[b, 1:]) + 1
             u = self.rngs[b].random((len(slots), 1 + m))

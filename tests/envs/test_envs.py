@@ -127,8 +127,8 @@ def test_full_state_observation():
 
 
 def test_relative_by_id_observation_keeps_each_pedestrian_in_its_slot():
-    """Slot j is pedestrian j at every step: its relative position while within 5 m, zero and masked otherwise —
-    and the same entries as the nearest-first observation, permuted."""
+    """Slot j is pedestrian j at every step: its relative position while within 5 m surface to surface (CrowdNav++'s
+    sensing), zero and masked otherwise — and the same entries as the nearest-first observation, permuted."""
     env = crowdbench.parallel_env(num_humans=12, observation="relative_by_id")
     sorted_obs = crowdbench.robots.make_observation("relative", env.config)
     obs, _ = env.reset(seed=3)
@@ -136,7 +136,7 @@ def test_relative_by_id_observation_keeps_each_pedestrian_in_its_slot():
     for _ in range(40):
         w = env.world
         rel = w.pos[0, 1:13] - w.pos[0, 0]
-        inside = np.linalg.norm(rel, axis=1) <= 5.0
+        inside = np.linalg.norm(rel, axis=1) - w.radius[0, 1:13] - w.radius[0, 0] <= 5.0
         o = obs["robot"]
         np.testing.assert_array_equal(o["mask"][:12], inside.astype(np.float32))
         np.testing.assert_allclose(o["humans"][:12][inside], rel[inside], atol=1e-5)

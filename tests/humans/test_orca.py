@@ -139,20 +139,32 @@ def test_facade_api_shape():
         sim.getAgentPosition(5)
 
 
-@pytest.mark.parametrize(("kwargs", "max_neighbors", "radius"), [
-    ({}, 13, 0.46),  # CrowdNav++'s pedestrians (the default): every agent a neighbour, 0.15 m safety space
-    ({"safety_space": 0.0, "max_neighbors": 10}, 10, 0.31),  # CrowdNav's
+_V_PREF = {"preferred_speed": None, "neighbor_dist_range": None}
+
+
+@pytest.mark.parametrize(("kwargs", "max_neighbors", "radius", "crowdnav_pref"), [
+    ({}, 13, 0.46, True),  # CrowdNav++'s pedestrians (the default): unit preferred velocity, U(5, 10) m neighbours
+    ({**_V_PREF}, 13, 0.46, False),  # v_pref toward the goal, 10 m
+    ({"safety_space": 0.0, "max_neighbors": 10, **_V_PREF}, 10, 0.31, False),  # CrowdNav's
 ])
-def test_world_orca_equals_facade(kwargs, max_neighbors, radius):
-    """The world's batched ORCA pedestrians (robot invisible) follow exactly what PyRVOSimulator computes."""
+def test_world_orca_equals_facade(kwargs, max_neighbors, radius, crowdnav_pref):
+    """The world's batched ORCA pedestrians (robot invisible) follow exactly what PyRVOSimulator computes — with
+    CrowdNav++'s preferred velocity (the goal vector cut to 1 m/s) and its crowd-wide neighbour distance draw."""
     w = CrowdWorld(WorldConfig(num_humans=12, robot_visible=False, time_limit=1e9, human_radius_range=None,
                                human_v_pref_range=None), 1, "circle_crossing_legacy", "orca", kwargs)
-    sim = PyRVOSimulator(0.25, 10, max_neighbors, 5, 5, radius, 1.0)
+    nd = float(w.human_model._flt[2, 0, 1])
+    assert (w.human_model._flt[2, 0, 1:] == nd).all()  # one draw for the crowd placed at reset
+    assert (5.0 <= nd <= 10.0) if crowdnav_pref else nd == 10.0
+    sim = PyRVOSimulator(0.25, nd, max_neighbors, 5, 5, radius, 1.0)
     for i in range(12):
         sim.addAgent(tuple(w.pos[0, i + 1]))
     for _ in range(120):
         for i in range(12):
-            sim.setAgentPrefVelocity(i, tuple(pref_velocity(sim.getAgentPosition(i), w.goal[0, i + 1], 1.0, 0.25)))
+            p = np.asarray(sim.getAgentPosition(i))
+            d = w.goal[0, i + 1] - p
+            pref = (d / max(np.linalg.norm(d), 1.0) if crowdnav_pref
+                    else pref_velocity(tuple(p), w.goal[0, i + 1], 1.0, 0.25))
+            sim.setAgentPrefVelocity(i, tuple(pref))
         sim.doStep()
         w.step(np.zeros((1, 2)))
         np.testing.assert_allclose([sim.getAgentPosition(i) for i in range(12)], w.pos[0, 1:], atol=1e-9)

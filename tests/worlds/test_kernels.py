@@ -170,19 +170,26 @@ def test_first_clear_kernel_equals_reference(seed):
         starts, pos, radius, active, agent, 0.1)
 
 
-def test_orca_inputs_kernel_equals_numpy():
+@pytest.mark.parametrize("pref_speed", [0.0, 1.0])
+def test_orca_inputs_kernel_equals_numpy(pref_speed):
     rng = np.random.default_rng(0)
     B, H = 3, 9
     pos, vel, goal, radius, v_pref, active = _scene(rng, B, H + 1)
+    goal[:, 1:4] = pos[:, 1:4] + rng.uniform(-0.6, 0.6, (B, 3, 2))  # some goals within 1 m
     ignore_robot = rng.random((B, H)) < 0.5
     outs = (np.zeros((B, H + 1, 2)), np.zeros((B, H + 1, 2)), np.zeros((B, H + 1, 2)), np.zeros((B, H + 1)),
             np.zeros((B, H + 1)), np.zeros((B, H + 1), bool), np.zeros((B, H + 1), np.int64))
     orca_inputs(pos[:, 0], vel[:, 0], radius[:, 0], pos[:, 1:], vel[:, 1:], goal[:, 1:], radius[:, 1:], v_pref[:, 1:],
-                active[:, 1:], ignore_robot, 0.16, 0.25, *outs)
+                active[:, 1:], ignore_robot, 0.16, 0.25, pref_speed, *outs)
     p, v, pref, rad, vmax, act, ignore = outs
     np.testing.assert_array_equal(p, pos)
     np.testing.assert_array_equal(v, vel)
-    np.testing.assert_array_equal(pref[:, 1:], preferred_velocity(pos[:, 1:], goal[:, 1:], v_pref[:, 1:], 0.25))
+    if pref_speed:  # CrowdNav++: the goal vector cut to 1 m/s, the raw vector within 1 m; v_pref is the limit
+        d = goal[:, 1:] - pos[:, 1:]
+        dist = np.linalg.norm(d, axis=-1, keepdims=True)
+        np.testing.assert_allclose(pref[:, 1:], np.where(dist > 1.0, d / dist, d), rtol=1e-15, atol=1e-15)
+    else:
+        np.testing.assert_array_equal(pref[:, 1:], preferred_velocity(pos[:, 1:], goal[:, 1:], v_pref[:, 1:], 0.25))
     np.testing.assert_array_equal(rad, radius + 0.16)
     np.testing.assert_array_equal(vmax[:, 1:], v_pref[:, 1:])
     np.testing.assert_array_equal(act[:, 1:], active[:, 1:])

@@ -24,11 +24,20 @@ def test_thirty_pedestrians_placed_without_overlap(name, seed):
 
 
 def test_circle_crossing_geometry():
-    lay = make_layout("circle_crossing")  # CrowdNav++'s: circle 6√2 m, noise ±1 m, robot start/goal drawn
-    starts, goals = lay.sample(np.random.default_rng(0), 20, 0.3, 0.3)
+    """CrowdNav++'s start rule: a uniform angle on the 6√2 m circle plus a one-sided U[0, 2) per coordinate
+    (crowd_sim_var_num.py:121-128), goal = −start; the calibrated and legacy crowds keep theirs."""
+    lay = make_layout("circle_crossing")
+    R = 6 * np.sqrt(2)
+    s, g = lay.candidates(np.random.default_rng(4), 0, 1, 1000)
+    rng = np.random.default_rng(4)
+    ang = rng.uniform(0, 2 * np.pi, 1000)
+    np.testing.assert_array_equal(s, R * np.stack([np.cos(ang), np.sin(ang)], 1) + rng.uniform(0, 2, (1000, 2)))
+    np.testing.assert_array_equal(g, -s)
+    assert abs((s - R * np.stack([np.cos(ang), np.sin(ang)], 1)).mean() - 1.0) < 0.05  # shifted by +(1, 1)
+    calibrated = make_layout("circle_crossing_calibrated")
+    starts, goals = calibrated.sample(np.random.default_rng(0), 20, 0.3, 0.3)
     np.testing.assert_allclose(goals, -starts)
     r = np.linalg.norm(starts, axis=1)
-    R = 6 * np.sqrt(2)
     assert (r > R - np.sqrt(2) - 1e-9).all() and (r < R + np.sqrt(2) + 1e-9).all()
     legacy = make_layout("circle_crossing_legacy")
     starts, _ = legacy.sample(np.random.default_rng(0), 20, 0.3, 0.3)
@@ -36,6 +45,22 @@ def test_circle_crossing_geometry():
     assert (r > 6 - 0.5 * np.sqrt(2) - 1e-9).all() and (r < 6 + 0.5 * np.sqrt(2) + 1e-9).all()
     s, g = legacy.robot_endpoints(np.random.default_rng(0), np.zeros((0, 2, 2)), 0.3)
     assert tuple(s) == (0.0, -6.0) and tuple(g) == (0.0, 6.0)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_circle_crossing_placement_is_crowdnavpps_clearance(seed):
+    """Each start is ≥ r_i + r_j + 0.25 m from every earlier agent's start *and* goal, the robot's included
+    (crowd_sim_var_num.py:129-140); the goals (−start) are not checked."""
+    lay = make_layout("circle_crossing")
+    rng = np.random.default_rng(seed)
+    robot = np.stack(lay.robot_endpoints(rng, np.zeros((0, 2, 2)), 0.3))
+    radii = rng.uniform(0.3, 0.5, 25)
+    starts, goals = lay.sample(rng, 25, radii, 0.3, robot_points=robot)
+    np.testing.assert_array_equal(goals, -starts)
+    for i in range(25):
+        for pts, rad in ((robot, np.full(2, 0.3)), (starts[:i], radii[:i]), (goals[:i], radii[:i])):
+            if len(pts):
+                assert (np.linalg.norm(starts[i] - pts, axis=1) >= radii[i] + rad + 0.25 - 1e-12).all()
 
 
 @pytest.mark.parametrize("name", ["circle_crossing", "intersection", "split_flow", "random_wander"])
@@ -71,9 +96,11 @@ def test_impossible_crowd_raises_clear_error():
         make_layout("circle_crossing").sample(np.random.default_rng(0), 200, 0.3, 0.3)
 
 
-@pytest.mark.parametrize(("layout", "bound"), [("circle_crossing_legacy", 7.5), ("circle_crossing", 11.0)])
-def test_goals_renew_so_density_holds(layout, bound):
-    w = CrowdWorld(WorldConfig(num_humans=20, time_limit=1e9, human_v_pref_range=None), 2, layout, "orca")
+@pytest.mark.parametrize(("layout", "bound", "model"), [
+    ("circle_crossing_legacy", 7.5, {"preferred_speed": None, "neighbor_dist_range": None}),  # its own pedestrians
+    ("circle_crossing", 12.0, {})])
+def test_goals_renew_so_density_holds(layout, bound, model):
+    w = CrowdWorld(WorldConfig(num_humans=20, time_limit=1e9, human_v_pref_range=None), 2, layout, "orca", model)
     first_goals = w.goal[:, 1:].copy()
     for _ in range(240):  # 60 s: every pedestrian reaches its first goal
         w.step(np.zeros((2, 2)))
@@ -84,27 +111,64 @@ def test_goals_renew_so_density_holds(layout, bound):
 
 
 def test_respawn_and_goal_changes_follow_crowdnav_plus_plus():
-    """Arrivals are re-spawned at rest on the circle with goal = −start; every 5 s about half of the pedestrians
-    change goal to a point near the circle; goals change at no other time."""
+    """Arrivals are re-spawned at rest by the start rule (goal = −start), never within r_i + r_j + 0.25 m of anyone's
+    position or goal, their slot's ``spawns`` count going up; every 5 s about half of the pedestrians change goal
+    to a point of the circle plus U[−v_pref/2, v_pref/2) per coordinate (crowd_sim.py:415-450); goals change at
+    no other time."""
     w = CrowdWorld(WorldConfig(num_humans=20, time_limit=1e9), 4, "circle_crossing", "orca")
     R = 6 * np.sqrt(2)
     changes, respawns = [], 0
     for t in range(1, 241):
-        before_goal = w.goal.copy()
+        before_goal, before_spawns = w.goal.copy(), w.spawns.copy()
         w.step(np.zeros((4, 2)))
-        changed = np.linalg.norm(w.goal - before_goal, axis=-1) > 1e-9
+        respawned = w.spawns != before_spawns
+        assert (w.spawns - before_spawns <= 1).all() and not respawned[:, 0].any()
+        changed = (np.linalg.norm(w.goal - before_goal, axis=-1) > 1e-9) & ~respawned
         changed[:, 0] = False
         if t % 20 == 0:
-            changes.append(changed[:, 1:].mean())
-            r = np.linalg.norm(w.goal[changed], axis=-1)
-            assert ((r > R - 1.0) & (r < R + 1.0)).all()
-        elif changed.any():  # between ticks only arrivals change goal: re-spawned
-            respawns += int(changed.sum())
-            r = np.linalg.norm(w.pos[changed], axis=-1)
-            assert ((r > R - 1.5) & (r < R + 1.5)).all()
-            np.testing.assert_allclose(w.goal[changed], -w.pos[changed])
-            assert (np.linalg.norm(w.vel[changed], axis=-1) == 0).all()
-            others = np.linalg.norm(w.pos[:, :, None] - w.pos[:, None], axis=-1) + np.eye(21) * 99
-            assert (others[changed].min(axis=-1) >= 0.6 - 1e-9).all()  # never on top of anyone
+            changes.append(changed[:, 1:].sum() / 80)
+            off = np.linalg.norm(w.goal[changed], axis=-1) - R
+            assert (np.abs(off) <= np.sqrt(2) * w.v_pref[changed] / 2 + 1e-9).all()
+        else:
+            assert not changed.any()  # between ticks only re-spawns change goals
+        if respawned.any():
+            respawns += int(respawned.sum())
+            r = np.linalg.norm(w.pos[respawned], axis=-1)
+            assert ((r >= R - 2 * np.sqrt(2)) & (r <= R + 2 * np.sqrt(2))).all()
+            np.testing.assert_allclose(w.goal[respawned], -w.pos[respawned])
+            assert (np.linalg.norm(w.vel[respawned], axis=-1) == 0).all()
+            for b, a in zip(*np.nonzero(respawned), strict=True):
+                others = np.flatnonzero(w.active[b] & (np.arange(21) != a))
+                need = w.radius[b, a] + w.radius[b, others] + 0.25
+                assert (np.linalg.norm(w.pos[b, others] - w.pos[b, a], axis=-1) >= need - 1e-9).all()
+                assert (np.linalg.norm(w.goal[b, others] - w.pos[b, a], axis=-1) >= need - 1e-9).all()
     assert respawns > 20
     assert 0.35 < np.mean(changes) < 0.65
+
+
+def test_a_respawn_with_no_room_waits_at_the_goal():
+    """No clear start (every candidate blocked): the pedestrian stays where it is, and is re-spawned once room
+    appears — never on top of anyone."""
+    w = CrowdWorld(WorldConfig(num_humans=2, time_limit=1e9, human_radius_range=None, human_v_pref_range=None), 1,
+                   "circle_crossing", "orca")
+    w.layout.spawn_candidates = 1
+    calls = {"n": 0}
+    real = w.layout.respawn_candidates
+
+    def blocked(rng, m):  # the first three re-spawn attempts land on pedestrian 1's position
+        calls["n"] += 1
+        s, g = real(rng, m)
+        if calls["n"] <= 3:
+            s = np.repeat(w.pos[0, 2:3], m, 0)
+            g = -s
+        return s, g
+
+    w.layout.respawn_candidates = blocked
+    w.set_agents(0, positions=np.array([[0, -3], [4, 4], [-6, -6]]), goals=np.array([[0, 3], [4.1, 4], [-6, -7]]))
+    w.step(np.zeros((1, 2)))
+    assert calls["n"] == 1 and w.spawns[0, 1] == 0  # waited
+    w.step(np.zeros((1, 2)))
+    w.step(np.zeros((1, 2)))
+    assert calls["n"] == 3 and w.spawns[0, 1] == 0
+    w.step(np.zeros((1, 2)))
+    assert w.spawns[0, 1] == 1 and np.linalg.norm(w.pos[0, 1] - w.pos[0, 2]) >= 0.6 + 0.25

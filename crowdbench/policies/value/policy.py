@@ -14,6 +14,7 @@ from crowdbench.config import WorldConfig
 from crowdbench.policies.base import RobotPolicy
 from crowdbench.policies.value.lookahead import Scene, action_set, action_values
 from crowdbench.policies.value.model import build_net
+from crowdbench.robots.observations import STATE_OBSERVATIONS, check_sensing
 
 GAMMA = 0.9
 """CrowdNav's discount, applied as γ^{Δt·v_pref} per step."""
@@ -26,7 +27,7 @@ def load_net(method: str, checkpoint: str | os.PathLike | None = None) -> tuple[
     ckpt = checkpoints.load(path, method)
     net = build_net(method, ckpt["model"])
     net.load_state_dict(ckpt["net"])
-    meta = {k: ckpt.get(k) for k in ("seed", "episodes", "phase")}
+    meta = {k: ckpt.get(k) for k in ("seed", "episodes", "phase", "sensing")}
     return net.eval(), {**meta, "gamma": float(ckpt.get("gamma", GAMMA)),
                         "free_space": bool(ckpt.get("free_space", False)), "path": path}
 
@@ -39,29 +40,35 @@ class ValuePolicy(RobotPolicy):
         checkpoint: Path or shipped name (default: the shipped checkpoint named like the method).
         net: Alternatively a live network (training).
         gamma: Discount per second at v_pref = 1 (default: the checkpoint's, else 0.9).
-        sensing_range: Pedestrians beyond this centre distance are not considered [m] (default:
-            ``config.sensing_range``, the paper's 5 m).
+        sensing: Sensing tier (``positions``: velocities estimated from positions; ``velocities``; ``full``;
+            default: the checkpoint's, ``velocities`` for checkpoints that do not say — they were trained on true
+            velocities).
+        sensing_range: Pedestrians beyond this centre distance are not considered [m] (default: no limit beyond
+            the observation's own sensing range).
         free_space: Value states with nobody sensed analytically
             (:func:`~crowdbench.policies.value.lookahead.free_space_value`; default: as the checkpoint was trained,
             ``False`` for checkpoints that do not say).
     """
 
-    observation = "full_state"
+    observation = "estimated_state"
     stateless = True
     method: ClassVar[str] = ""
 
     def __init__(self, config: WorldConfig | None = None, checkpoint: str | None = None,
-                 net: torch.nn.Module | None = None, gamma: float | None = None,
+                 net: torch.nn.Module | None = None, gamma: float | None = None, sensing: str | None = None,
                  sensing_range: float | None = None, free_space: bool | None = None) -> None:
         super().__init__(config)
         self.meta: dict[str, Any] = {}
         if net is None:
             net, self.meta = load_net(self.method, checkpoint)
         self.net = net
+        tier = sensing if sensing is not None else (self.meta.get("sensing") or ("velocities" if self.meta
+                                                                                   else "positions"))
+        self.observation = STATE_OBSERVATIONS[check_sensing(tier, f"robot policy {self.method}: sensing")]
         self.gamma = float(gamma if gamma is not None else self.meta.get("gamma", GAMMA))
         if not 0.0 < self.gamma <= 1.0:
             raise ValueError(f"gamma={self.gamma}; valid choices: a number in (0, 1]")
-        self.sensing_range = float(sensing_range if sensing_range is not None else self.config.sensing_range)
+        self.sensing_range = float(sensing_range if sensing_range is not None else np.inf)
         self.free_space = bool(free_space if free_space is not None else self.meta.get("free_space", False))
         self.actions = torch.as_tensor(action_set(), dtype=torch.float32)
 
