@@ -271,6 +271,19 @@ def panels_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def crowd_validate_cmd(args: argparse.Namespace) -> int:
+    """Pedestrian models against the recorded ETH/UCY people (:mod:`crowdbench.datasets.validate`)."""
+    from crowdbench.datasets import validate as cv
+
+    models = [m.strip() for m in args.models.split(",") if m.strip()]
+    scenes = [s.strip() for s in args.scenes.split(",") if s.strip()] if args.scenes else list(cv.SCENES)
+    result = cv.validate(models, scenes)
+    print(cv.markdown(result))
+    if args.json:
+        write_text(args.json, json.dumps(result, indent=2) + "\n")
+    return 0
+
+
 def paper_cmd(args: argparse.Namespace) -> int:
     """Every stored board cell beside the paper's number (:mod:`crowdbench.paper`); reads cells, runs nothing."""
     from crowdbench import paper
@@ -500,6 +513,12 @@ def main(argv: list[str] | None = None) -> int:
     q.set_defaults(func=paper_cmd)
     q = lsub.add_parser("list", help="shipped entries, registered policies with checkpoints, suites")
     q.set_defaults(func=leaderboard_list_cmd)
+    p = sub.add_parser("crowd-validate", help="ADE/FDE of pedestrian models against the recorded ETH/UCY people")
+    p.add_argument("--models", default="const_vel,orca,social_force,responsive_orca",
+                   help="comma-separated: const_vel and any pedestrian model (default: %(default)s)")
+    p.add_argument("--scenes", default=None, help="comma-separated subset of eth,hotel,univ,zara1,zara2 (default all)")
+    p.add_argument("--json", default=None, help="write {scene: {model: {ade, fde, samples}}} to this file")
+    p.set_defaults(func=crowd_validate_cmd)
     p = sub.add_parser("plot", help="success trends of `tables` result files (ablation figure)")
     p.add_argument("results", nargs="+", help="JSON files written by `crowdbench tables --json`")
     p.add_argument("--out", default="trends.png")

@@ -29,6 +29,7 @@ from typing import Any
 
 from crowdbench.io import write_text
 from crowdbench.leaderboard import (
+    TABLES,
     Cell,
     Entry,
     cells,
@@ -61,7 +62,7 @@ class Suite:
     (``check``), out of sample — the two must agree within their intervals (``crowdbench leaderboard paper``
     reports where they do not). None: no check."""
     tables: tuple[str, ...] = ("I", "II", "III")
-    """Which of the paper's tables (their cells: :func:`crowdbench.leaderboard.cells`)."""
+    """Which tables (their cells: :func:`crowdbench.leaderboard.cells`): the paper's I–III and IV, real crowds."""
     rows: tuple[str, ...] = ()
     """Optional subset of the tables' cells by ``TABLE/ROW`` (e.g. ``"III/split_flow Medium"``); empty = all."""
     worlds: int = 100
@@ -84,10 +85,10 @@ class Suite:
                              f"at least episodes={self.episodes} away from seed={self.seed} (disjoint world seeds)")
         object.__setattr__(self, "tables", tuple(self.tables))
         object.__setattr__(self, "rows", tuple(self.rows))
-        bad = [t for t in self.tables if t not in ("I", "II", "III")]
+        bad = [t for t in self.tables if t not in TABLES]
         if bad or not self.tables:
             raise ValueError(f"suite {self.name!r}: tables={list(self.tables)}; valid choices: a non-empty subset of "
-                             "I, II, III")
+                             f"{', '.join(TABLES)}")
         known = {f"{c.table}/{c.row}" for c in cells(self.tables)}
         unknown = sorted(set(self.rows) - known)
         if unknown:

@@ -4,7 +4,9 @@ Cells (500 episodes each by default, latent-responsive ORCA pedestrians, δ = 0.
 
 * Table I — circle crossing, 20 pedestrians, ρ ∈ {0.7 High, 0.5 Medium, 0.3 Low};
 * Table II — circle crossing, ρ = 0 (non-responsive regime), N ∈ {10, 20, 30};
-* Table III — unseen layouts (intersection, split flow, random wander), 30 pedestrians, ρ ∈ {0.7, 0.5, 0.3}.
+* Table III — unseen layouts (intersection, split flow, random wander), 30 pedestrians, ρ ∈ {0.7, 0.5, 0.3};
+* Table IV — real crowds: the five ETH/UCY scenes, recorded people replayed blind to the robot (``replay``) or
+  avoiding it and rejoining their paths (``reactive_replay``), slots for the scene's peak crowd.
 
 Each cell uses evaluation seed S (episode k ↔ world seed S + k), so every policy meets exactly the same crowds.
 """
@@ -28,19 +30,25 @@ from crowdbench.policies import make_policy
 REGIMES = {"High": 0.7, "Medium": 0.5, "Low": 0.3}
 
 
+TABLES = ("I", "II", "III", "IV")
+
+
 @dataclass(frozen=True)
 class Cell:
-    """One evaluation setting: table, row label, layout, crowd size and mean responsiveness ρ."""
+    """One evaluation setting: table, row label, layout, crowd size, mean responsiveness ρ and pedestrian model."""
 
     table: str
     row: str
     layout: str
     humans: int
     rho: float
+    model: str = "responsive_orca"
 
 
 def cells(tables: tuple[str, ...] = ("I", "II", "III")) -> list[Cell]:
     """The grid of the requested tables."""
+    from crowdbench.worlds.recorded import PEAK
+
     out: list[Cell] = []
     if "I" in tables:
         out += [Cell("I", name, "circle_crossing", 20, rho) for name, rho in REGIMES.items()]
@@ -49,6 +57,9 @@ def cells(tables: tuple[str, ...] = ("I", "II", "III")) -> list[Cell]:
     if "III" in tables:
         out += [Cell("III", f"{lay} {name}", lay, 30, rho) for lay in ("intersection", "split_flow", "random_wander")
                 for name, rho in REGIMES.items()]
+    if "IV" in tables:
+        out += [Cell("IV", f"{scene} {model}", scene, peak, 0.0, model) for scene, peak in PEAK.items()
+                for model in ("replay", "reactive_replay")]
     return out
 
 
@@ -67,14 +78,14 @@ def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed
     for k, c in enumerate(grid, 1):
         t = time.time()
         policy = make_policy(policy_name, **(policy_kwargs or {}))
+        kwargs = {"responsiveness": c.rho, **(model_kwargs or {})} if c.model == "responsive_orca" else {}
         eps = run_episodes(policy, episodes, seed=seed, num_worlds=num_worlds,
                            layout=make_layout(c.layout, **(layout_kwargs or {})), num_humans=c.humans,
-                           human_model="responsive_orca",
-                           human_model_kwargs={"responsiveness": c.rho, **(model_kwargs or {})},
+                           human_model=c.model, human_model_kwargs=kwargs,
                            counterfactual=counterfactual, **(world_options or {}))
         s = summarize(eps)
         results.append({"policy": label or policy_name, "table": c.table, "row": c.row, "layout": c.layout,
-                        "humans": c.humans, "responsiveness": c.rho, "seed": seed, **s,
+                        "humans": c.humans, "responsiveness": c.rho, "human_model": c.model, "seed": seed, **s,
                         "wall_s": round(time.time() - t, 1)})
         if progress:
             eta = (time.time() - t_start) / k * (len(grid) - k)
@@ -354,10 +365,11 @@ def parse_entry(spec: str) -> Entry:
 
 def scenario_digest(tables: tuple[str, ...] = ("I", "II", "III")) -> str:
     """SHA-256 (16 hex digits) of everything that defines the crowds of the grid (:func:`~crowdbench.worlds.digest.
-    crowd_digest` over its layouts) — a cached result is stale when the scenario changes."""
+    crowd_digest` over its layouts and pedestrian models) — a cached result is stale when the scenario changes."""
     from crowdbench.worlds.digest import crowd_digest
 
-    return crowd_digest(tuple(sorted({c.layout for c in cells(tables)})))
+    grid = cells(tables)
+    return crowd_digest(tuple(sorted({c.layout for c in grid})), tuple(sorted({c.model for c in grid})))
 
 
 def entry_sensing(entry: Entry) -> str:
@@ -387,7 +399,10 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
 TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
                 "II": "Table II — crowd size (circle crossing, non-responsive ρ = 0)",
                 "III": "Table III — unseen layouts (N = 30; trained on circle crossing only; pooled = the three "
-                       "layouts together, the paper's presentation)"}
+                       "layouts together, the paper's presentation)",
+                "IV": "Table IV — real crowds (ETH/UCY test recordings, slots for each scene's peak crowd; replay: "
+                      "people as recorded, blind to the robot; reactive_replay: they avoid the robot, then rejoin "
+                      "their paths); PS = personal-space compliance [%]"}
 
 
 def _clear_best(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
@@ -463,7 +478,7 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
             out += [f"## {head} across training seeds", "",
                     f"Every shipped training seed of {head} on the same crowds; the last row gives the mean "
                     "success and, in brackets, its spread (max − min) over the seeds.", ""]
-        for table in ("I", "II", "III"):
+        for table in TABLES:
             settings = []
             for lb in labels:
                 for r in board[lb]:
@@ -489,9 +504,12 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                     succ = f"{100 * r['success_rate']:.1f}"
                     if r is best[s]:
                         succ = f"**{succ}**"
+                    ps = (f" · PS {100 * r['personal_space']:.0f}" if table == "IV" and "personal_space" in r
+                          else "")
                     cellsx.append(f"{succ}{_ci(r, 'success_rate', 100, 0)} / {100 * r['collision_rate']:.1f} / "
                                   f"{100 * r['timeout_rate']:.1f} · " + (f"{r['nav_time']:.1f} s"
-                                                                           if math.isfinite(r["nav_time"]) else "—"))
+                                                                           if math.isfinite(r["nav_time"]) else "—")
+                                  + ps)
                 out.append(f"| {lb} | " + " | ".join(cellsx) + " |")
             if group.startswith("seeds"):
                 stats = [_mean_spread(board, labels, table, s_) for s_ in settings]
@@ -557,7 +575,7 @@ def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list
         return []
     settings = sorted(dict.fromkeys((r["table"], r["row"]) for lb in families for r in board[lb]
                                     if r["table"] != "III" or r["row"].startswith("pooled")),
-                      key=lambda s: ("I", "II", "III").index(s[0]))  # stable: each table's settings in board order
+                      key=lambda s: TABLES.index(s[0]))  # stable: each table's settings in board order
     intro = ("The paper's ablation question over training seeds: mean success [%] of the reference and each "
              "ablation over its shipped training seeds and, in brackets, the spread (max − min). The tables above "
              "show seed 0 of each." if ablations else

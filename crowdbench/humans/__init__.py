@@ -12,5 +12,8 @@ from crowdbench.humans.orca import ORCA, ORCAParams, PyRVOSimulator
 from crowdbench.humans.responsive import ResponsiveORCA
 from crowdbench.humans.social_force import SocialForce
 
+HUMAN_MODELS.register("replay", "crowdbench.humans.replay:Replay")  # recorded people (eth, hotel, univ, zara1, zara2)
+HUMAN_MODELS.register("reactive_replay", "crowdbench.humans.replay:ReactiveReplay")
+
 __all__ = ["HUMAN_MODELS", "ORCA", "ORCAParams", "CrowdState", "HumanModel", "Linear", "PyRVOSimulator",
            "ResponsiveORCA", "SocialForce", "make", "preferred_velocity", "register"]

@@ -22,6 +22,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -66,6 +67,8 @@ class CrowdState:
     """[s]"""
     spawns: np.ndarray | None = None
     """``(B, H)`` int: re-spawns of each slot this episode — a new person whenever it changes (None: never)."""
+    layout: Any = None
+    """The worlds' :class:`~crowdbench.worlds.layouts.Layout` (recorded-scene models read their recording from it)."""
 
 
 class HumanModel(ABC):
@@ -96,6 +99,14 @@ class HumanModel(ABC):
     def info(self) -> dict[str, np.ndarray]:
         """Optional: per-pedestrian arrays ``(B, H)`` exposed in the world's info for analysis."""
         return {}
+
+    def script(self, state: CrowdState) -> tuple[np.ndarray, ...] | None:
+        """Optional, for models that place people directly (recorded crowds): called after every reset and step,
+        returns ``(moved, positions, goals, v_pref, active)`` — ``(B, H)`` bool slots to put at ``positions``
+        ``(B, H, 2)`` [m] with ``goals`` ``(B, H, 2)`` [m] and speed limits ``v_pref`` ``(B, H)`` [m/s] (velocity
+        zeroed), and ``(B, H)`` bool which slots are present (a slot that stops being present is parked).
+        ``None`` (default): the world moves everyone by velocity."""
+        return None
 
 
 class PedestrianModelError(RuntimeError):

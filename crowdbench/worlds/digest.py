@@ -15,9 +15,11 @@ surface distance). Change it whenever such a rule changes: every stored cell and
 stale."""
 
 
-def crowd_digest(layouts: tuple[str, ...] = ("circle_crossing",), model: str = "responsive_orca") -> str:
+def crowd_digest(layouts: tuple[str, ...] = ("circle_crossing",), models: tuple[str, ...] = ("responsive_orca",)
+                 ) -> str:
     """SHA-256 (16 hex digits) of :data:`RULES`, the default :class:`~crowdbench.config.WorldConfig`, the settings
-    of ``layouts`` and ``model``'s parameters. With the defaults: the training crowd of every learned method."""
+    of ``layouts`` and the parameters of ``models``. With the defaults: the training crowd of every learned method
+    (the digest it had before ``models`` took several names)."""
     from crowdbench.config import WorldConfig
     from crowdbench.humans import make as make_model
     from crowdbench.worlds.layouts import make_layout
@@ -25,7 +27,9 @@ def crowd_digest(layouts: tuple[str, ...] = ("circle_crossing",), model: str = "
     parts = [RULES, repr(WorldConfig())]
     for layout in sorted(set(layouts)):
         parts.append(f"{layout}: {sorted(vars(make_layout(layout)).items())}")
-    m = make_model(model)
-    parts.append(repr(getattr(m, "params", None)) + repr(sorted((k, v) for k, v in vars(m).items()
-                                                              if isinstance(v, float))))
+    for name in models:
+        m = make_model(name)
+        part = repr(getattr(m, "params", None)) + repr(sorted((k, v) for k, v in vars(m).items()
+                                                            if isinstance(v, float)))
+        parts.append(part if name == "responsive_orca" else f"{name}: {part}")
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]

@@ -520,6 +520,10 @@ class RandomWander(Layout):
         return (2 * u - 1) * self.extent
 
 
+for _scene in ("eth", "hotel", "univ", "zara1", "zara2"):  # loaded on first use (they read package data)
+    LAYOUTS.register(_scene, f"crowdbench.worlds.recorded:{_scene.capitalize()}Scene")
+
+
 def make_layout(name: str | Layout, **kwargs) -> Layout:
     """Resolve a layout by registry name (or pass an instance through)."""
     if isinstance(name, Layout):

@@ -221,7 +221,7 @@ class CrowdWorld:
             v_pref=self.v_pref[:, 1:], headings=self.heading[:, 1:], active=self.active[:, 1:],
             robot_position=self.pos[:, 0], robot_velocity=self.vel[:, 0], robot_radius=self.radius[:, 0],
             robot_visible=self.config.robot_visible, obstacles=self.obstacles, edges=self.edges, time_step=self.dt,
-            spawns=self.spawns[:, 1:])
+            spawns=self.spawns[:, 1:], layout=self.layout)
 
     def goal_distance(self) -> np.ndarray:
         """Robot centre to goal ``(B,)`` [m]."""
@@ -268,6 +268,7 @@ class CrowdWorld:
         self.prev_goal_dist[idx] = self.goal_distance()[idx]
         self.physics.set_positions(idx, self.pos[idx])
         self.human_model.reset(idx, self.model_rngs, self.crowd_state())
+        self._apply_script()
 
     def _draw_attributes(self, b: int, rng: np.random.Generator, slots: slice | int) -> None:
         """Per-pedestrian radius and preferred speed of world ``b``'s agents ``slots`` (a slice, or one agent index;
@@ -357,6 +358,7 @@ class CrowdWorld:
                 self._reached &= self._within_goal()
         if events & 1:
             self._renew_goals(self._reached)
+        self._apply_script()
         return StepResult(floats, ints, flags)
 
     def _human_velocities(self, state: CrowdState) -> np.ndarray:
@@ -401,6 +403,28 @@ class CrowdWorld:
             u = np.empty((len(bi), 0))
         self.goal[bi, hi + 1] = self.layout.renew_goals(u, self.pos[bi, hi + 1], self.goal[bi, hi + 1])
 
+
+    def _apply_script(self) -> None:
+        """Place the pedestrians a scripted model moves directly (:meth:`~crowdbench.humans.HumanModel.script`:
+        recorded people appearing, leaving, or jumping to their recording): positions and goals set, velocities
+        zeroed, activity updated, leavers parked; pymunk follows. A no-op for models without a script."""
+        script = self.human_model.script(self.crowd_state())
+        if script is None:
+            return
+        moved, positions, goals, v_pref, active = script
+        was = self.active[:, 1:].copy()
+        gone = was & ~active
+        if not (moved.any() or gone.any() or (active & ~was).any()):
+            return
+        pos, goal, vel = self.pos[:, 1:], self.goal[:, 1:], self.vel[:, 1:]
+        self.active[:, 1:] = active
+        pos[moved], goal[moved] = positions[moved], goals[moved]
+        self.v_pref[:, 1:][moved] = v_pref[moved]
+        pos[gone] = goal[gone] = self._park[:, 1:][gone]
+        vel[moved | gone] = 0.0
+        worlds = np.flatnonzero((moved | gone).any(axis=1))
+        if len(worlds):
+            self.physics.set_positions(worlds, self.pos[worlds])
 
     def _within_goal(self) -> np.ndarray:
         """``(B, H)`` bool: active pedestrians within their own radius of their goal (the arrival test)."""
