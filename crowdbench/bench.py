@@ -152,6 +152,46 @@ def pettingzoo_steps_per_s(n: int, steps: int, repeats: int, resets: bool) -> di
     return _stats([run(r) for r in range(repeats)])
 
 
+def crowd_control_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> dict[str, dict[str, float]]:
+    """Steps per second with every pedestrian driven from outside (random normalised actions, the multi-agent
+    testbed) against the same crowd driven by ORCA, in alternation: ``worlds == 1`` through
+    ``crowdbench.parallel_env(robot=None)``, else the batched :class:`~crowdbench.envs.marl.CrowdMARLEnv`
+    (``step(None)``: the model drives) — observations and rewards built alike (figures: env steps/s, one world;
+    world steps/s × worlds, batched)."""
+    import crowdbench
+    from crowdbench.envs.marl import CrowdMARLEnv
+
+    rng = np.random.default_rng(0)
+    if worlds == 1:
+        env = crowdbench.parallel_env(num_humans=n, robot=None, time_limit=1e9)
+        env.reset(seed=0)
+        acts = [{f"human_{i}": rng.uniform(-1, 1, 2) for i in range(n)} for _ in range(steps)]
+
+        def run(driven: bool) -> float:
+            env.reset(seed=0)
+            t = time.perf_counter()
+            for k in range(steps):
+                env.step(acts[k] if driven else {})
+            return steps / (time.perf_counter() - t)
+    else:
+        marl = CrowdMARLEnv(num_worlds=worlds, num_humans=n, robot=None, device=None, time_limit=1e9)
+        acts = rng.uniform(-1, 1, (steps, worlds, n, 2))
+
+        def run(driven: bool) -> float:
+            marl.reset(seed=0)
+            t = time.perf_counter()
+            for k in range(steps):
+                marl.step(acts[k] if driven else None)
+            return steps * worlds / (time.perf_counter() - t)
+
+    run(True), run(False)  # warm-up (compiled kernels)
+    out: dict[str, list[float]] = {"driven": [], "model": []}
+    for _ in range(repeats):  # alternated, so drift hits both alike
+        out["driven"].append(run(True))
+        out["model"].append(run(False))
+    return {k: _stats(v) for k, v in out.items()}
+
+
 def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> dict[str, float]:
     from crowdbench.humans import preferred_velocity
     from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
@@ -314,6 +354,9 @@ def run(quick: bool = False) -> dict[str, Any]:
         for n in (20, 50, 200):
             res["orca_agent_steps_per_s"][str(n)] = orca_agent_steps_per_s(n, 64, (3 if quick else 20)
                                                                            if n == 200 else (10 if quick else 60), rep)
+        res["crowd_control_steps_per_s"] = {
+            "1": crowd_control_steps_per_s(20, 1, 100 if quick else 1000, rep),
+            "64": crowd_control_steps_per_s(20, 64, 5 if quick else 100, rep)}
         res["h2int_inference_ms"] = h2int_inference_ms(rep)
         res["decision_ms"] = decision_ms_all(rep)
     # a robot's computer gives its planner every core: the same decisions (bitwise for CADRL and SARL, tested),

@@ -3,6 +3,6 @@
 from __future__ import annotations
 
 from crowdbench.envs.gym_env import CrowdNavEnv, register_envs
-from crowdbench.envs.parallel import CrowdParallelEnv, parallel_env
+from crowdbench.envs.parallel import CrowdParallelEnv, env, parallel_env, raw_env
 
-__all__ = ["CrowdNavEnv", "CrowdParallelEnv", "parallel_env", "register_envs"]
+__all__ = ["CrowdNavEnv", "CrowdParallelEnv", "env", "parallel_env", "raw_env", "register_envs"]

@@ -12,6 +12,9 @@ it bit for bit (``tests/worlds/test_kernels.py``):
 * :func:`robot_observation` / :func:`human_observation` — nearest-first observation arrays in float32
   (reference: ``reference.robot_observation`` / ``reference.human_observation``); both at once for one world:
   :func:`one_world_observations`;
+* :func:`agent_observations_batch` — every agent's (robot included) observation in the pedestrians' layout, all
+  worlds at once (the multi-agent interfaces);
+* :func:`crowd_clearance` — each pedestrian's nearest surface distance and contacts (pedestrian rewards);
 * :func:`first_clear` — the first re-spawn candidate clear of everyone (reference: ``reference.first_clear``).
 * :func:`spawn_clear`, :func:`change_goals` — CrowdNav++'s spawn and goal-change clearance (reference:
   ``reference.spawn_clear``).
@@ -338,6 +341,71 @@ def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, se
             f = neighbors[i - 1, s]
             f[0], f[1] = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1]
             f[2], f[3], f[4] = vel[j, 0], vel[j, 1], radius[j]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def agent_observations_batch(pos, vel, goal, radius, v_pref, heading, active, sensing_range, robot_visible, me,
+                             neighbors, mask):  # pragma: no cover - numba
+    """Every agent's own observation in every world — the robot (agent 0) included, in the pedestrians' layout
+    (:func:`human_observation`) — in place; inactive agents observe zeros (multi-agent testbed).
+
+    Args (``B`` worlds of ``A`` agents, ``n`` observed slots): as :func:`human_observation` without ``world``;
+        me: Out ``(B, A, 9)``; neighbors: Out ``(B, A, n, 5)``; mask: Out ``(B, A, n)`` (float32). The robot sees
+        the pedestrians within ``sensing_range``; a pedestrian sees the robot only when ``robot_visible``.
+    """
+    B, A = radius.shape
+    n = neighbors.shape[2]
+    dist = np.empty(max(n, 1))
+    idx = np.empty(max(n, 1), np.int64)
+    for b in range(B):
+        for i in range(A):
+            m = me[b, i]
+            neighbors[b, i] = 0.0
+            mask[b, i] = 0.0
+            if not active[b, i]:
+                m[:] = 0.0
+                continue
+            m[0], m[1], m[2], m[3] = pos[b, i, 0], pos[b, i, 1], vel[b, i, 0], vel[b, i, 1]
+            m[4], m[5], m[6], m[7], m[8] = goal[b, i, 0], goal[b, i, 1], radius[b, i], v_pref[b, i], heading[b, i]
+            count = 0
+            if n > 0:
+                for j in range(A):
+                    if j == i or not active[b, j] or (j == 0 and not robot_visible):
+                        continue
+                    dx, dy = pos[b, j, 0] - pos[b, i, 0], pos[b, j, 1] - pos[b, i, 1]
+                    d = math.sqrt(dx * dx + dy * dy)
+                    if d <= sensing_range:
+                        count = _insert(dist, idx, count, n, d, j)
+            for s in range(count):
+                j = idx[s]
+                mask[b, i, s] = 1.0
+                f = neighbors[b, i, s]
+                f[0], f[1] = pos[b, j, 0] - pos[b, i, 0], pos[b, j, 1] - pos[b, i, 1]
+                f[2], f[3], f[4] = vel[b, j, 0], vel[b, j, 1], radius[b, j]
+
+
+@nb.njit(cache=True, error_model="numpy")
+def crowd_clearance(pos, radius, active, robot_visible, nearest, touch_ped, touch_robot):  # pragma: no cover
+    """Per pedestrian of every world, in place: ``nearest`` ``(B, H)`` — the smallest surface distance to another
+    active agent (the robot counted when ``robot_visible``; inf if none) [m] —, ``touch_ped`` / ``touch_robot``
+    ``(B, H)`` bool — its disc overlaps another pedestrian's / the robot's. Inactive pedestrians: inf, False."""
+    B, A = radius.shape
+    for b in range(B):
+        for i in range(1, A):
+            near, tp, tr = np.inf, False, False
+            if active[b, i]:
+                for j in range(A):
+                    if j == i or not active[b, j] or (j == 0 and not robot_visible):
+                        continue
+                    dx, dy = pos[b, j, 0] - pos[b, i, 0], pos[b, j, 1] - pos[b, i, 1]
+                    d = math.sqrt(dx * dx + dy * dy) - radius[b, i] - radius[b, j]
+                    near = min(near, d)
+                    if d < 0.0:
+                        if j == 0:
+                            tr = True
+                        else:
+                            tp = True
+            nearest[b, i - 1], touch_ped[b, i - 1], touch_robot[b, i - 1] = near, tp, tr
 
 
 @nb.njit(cache=True, error_model="numpy")

@@ -203,6 +203,34 @@ class CrowdWorld:
                 raise ValueError(f"obstacles: the robot's {'start' if bad[0] else 'goal'} "
                                  f"{tuple(pts[int(not bad[0])])} lies on or within {radius} m of an obstacle")
 
+    # ------------------------------------------------------------------ pickling
+    def __getstate__(self) -> dict:
+        """Everything but pymunk's spaces (C objects that do not pickle; rebuilt from the arrays on load) and the
+        cached :class:`CrowdState` (views, rebuilt on first use)."""
+        state = self.__dict__.copy()
+        state["physics"], state["_state"] = None, None
+        return state
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+        B = self.num_worlds
+        self.physics = PymunkWorlds(self.radius[0], self.obstacles, B)
+        for b in range(B):
+            self.physics.set_radii(b, self.radius[b])
+        self.physics.set_positions(np.arange(B), self.pos)
+
+    def retire(self, mask: np.ndarray) -> None:
+        """Take the pedestrians ``mask`` ``(B, H)`` bool out of their episode: inactive, parked far away, at rest
+        (multi-agent episodes in which pedestrians finish one by one); back at the next reset."""
+        mask = np.asarray(mask, dtype=bool)
+        if not mask.any():
+            return
+        self.active[:, 1:][mask] = False
+        self.pos[:, 1:][mask] = self.goal[:, 1:][mask] = self._park[:, 1:][mask]
+        self.vel[:, 1:][mask] = 0.0
+        worlds = np.flatnonzero(mask.any(axis=1))
+        self.physics.set_positions(worlds, self.pos[worlds])
+
     def space(self, world: int) -> pymunk.Space:
         """The pymunk space of world ``world`` (for spatial queries and custom physics; keep it in sync yourself)."""
         return self.physics.spaces[world]
@@ -329,7 +357,8 @@ class CrowdWorld:
         Args:
             robot_action: ``(B, 2)``, see :meth:`robot_velocity`.
             human_actions: Optional ``(B, H, 2)`` velocities [m/s] for externally driven pedestrians.
-            human_override: ``(B, H)`` bool: which pedestrians follow ``human_actions`` instead of the model.
+            human_override: ``(B, H)`` bool: which pedestrians follow ``human_actions`` instead of the model. When
+                it covers every active pedestrian the pedestrian model is not stepped at all.
 
         The pedestrian model runs first (its own kernels), then the step's arithmetic in one compiled call
         (:func:`crowdbench.worlds._kernels.advance`, tested bit for bit against the numpy of
@@ -338,9 +367,14 @@ class CrowdWorld:
         B = self.num_worlds
         hv = self._still  # (B, 0, 2) without pedestrians
         if self.num_humans:  # from the pre-step state
-            hv = self._human_velocities(self.crowd_state())
             if human_override is not None and human_override.any():
-                hv = np.where(human_override[..., None], human_actions, hv)
+                if (human_override | ~self.active[:, 1:]).all():  # everyone driven from outside: no model step
+                    hv = np.where(human_override[..., None], human_actions, 0.0)
+                else:
+                    hv = np.where(human_override[..., None], human_actions,
+                                  self._human_velocities(self.crowd_state()))
+            else:
+                hv = self._human_velocities(self.crowd_state())
         unicycle = self._unicycle
         # the kernel copies both into vel (and clips the holonomic robot's to v_pref)
         rv = self.robot_velocity(robot_action) if unicycle else np.asarray(robot_action, dtype=np.float64)

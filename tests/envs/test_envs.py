@@ -81,8 +81,10 @@ def test_driven_pedestrian_follows_its_action_others_follow_the_model():
     ref = crowdbench.parallel_env(num_humans=5, human_model="orca", time_limit=1e9)
     ref.reset(seed=0)
     before = env.world.pos[0, 1].copy()
-    env.step({"robot": np.zeros(2), "human_0": np.array([0.4, -0.2])})
-    np.testing.assert_allclose(env.world.pos[0, 1] - before, np.array([0.4, -0.2]) * 0.25)
+    v_pref = env.world.v_pref[0, 1]
+    env.step({"robot": np.zeros(2), "human_0": np.array([0.4, -0.2])})  # normalised: the elliptical grid map
+    want = v_pref * np.array([0.4 * np.sqrt(1 - 0.02), -0.2 * np.sqrt(1 - 0.08)])
+    np.testing.assert_allclose(env.world.pos[0, 1] - before, want * 0.25)
     ref.step({"robot": np.zeros(2)})
     assert not np.allclose(env.world.pos[0, 1], ref.world.pos[0, 1])
 
@@ -155,3 +157,111 @@ def test_unknown_option_and_render_mode_errors():
         crowdbench.parallel_env(render_mode="human")
     with pytest.raises(ValueError, match="unknown robot observation 'x'"):
         crowdbench.parallel_env(observation="x")
+
+
+# ---------------------------------------------------------------------------------------- multi-agent testbed
+def test_pettingzoo_conventions_env_raw_env_and_api_tests():
+    from pettingzoo.test import api_test, parallel_api_test
+
+    api_test(crowdbench.env(num_humans=10), num_cycles=30)
+    from pettingzoo import AECEnv
+
+    assert isinstance(crowdbench.raw_env(num_humans=3), AECEnv)
+    for kw in ({"flat_observations": True}, {"robot": None}, {"robot": "orca", "flat_observations": True},
+               {"pedestrians_finish": True, "robot": None}):
+        parallel_api_test(crowdbench.parallel_env(num_humans=8, **kw), num_cycles=40)
+
+
+@pytest.mark.parametrize("how", ["pickle", "deepcopy"])
+def test_a_restored_env_steps_to_the_same_observations(how):
+    import copy
+    import pickle
+
+    env = crowdbench.parallel_env(num_humans=10, human_model="responsive_orca", robot=None)
+    env.reset(seed=3)
+    for _ in range(5):
+        env.step({})
+    twin = pickle.loads(pickle.dumps(env)) if how == "pickle" else copy.deepcopy(env)
+    for _ in range(60):
+        a, *_ = env.step({"human_2": np.array([0.5, -0.5])})
+        b, *_ = twin.step({"human_2": np.array([0.5, -0.5])})
+        for agent in a:
+            for k in a[agent]:
+                np.testing.assert_array_equal(a[agent][k], b[agent][k])
+    np.testing.assert_array_equal(env.world.physics_positions(), twin.world.physics_positions())
+
+
+def test_flat_observations_one_box_for_everyone_and_constant_agents():
+    env = crowdbench.parallel_env(num_humans=6, flat_observations=True)
+    obs, _ = env.reset(seed=1)
+    spaces_ = {id(env.observation_space(a)) for a in env.possible_agents}
+    assert len(spaces_) == 1 and {env.action_space(a).shape for a in env.possible_agents} == {(2,)}
+    assert set(obs) == set(env.possible_agents) and obs["robot"].shape == (9 + 6 * 30,)
+    crowd = crowdbench.parallel_env(num_humans=6, flat_observations=True, pedestrians_finish=True, robot=None,
+                                    time_limit=60.0)
+    crowd.reset(seed=1)
+    agents, finished = list(crowd.agents), set()
+    while crowd.agents:
+        assert crowd.agents == agents  # constant until everyone is done
+        earlier = set(finished)
+        obs, rew, term, trunc, _ = crowd.step({})  # the pedestrian model walks them to their goals
+        finished |= {a for a in crowd.agents if not obs[a].any()}
+        assert all(rew[a] == 0.0 and not obs[a].any() for a in earlier & set(rew))
+    assert len(finished) >= 3  # pedestrians finished one by one, then saw zeros
+
+
+def test_normalised_actions_are_never_clipped_and_out_of_range_is_an_error():
+    from crowdbench.envs.parallel import disc_velocity
+
+    a = np.random.default_rng(0).uniform(-1, 1, (1000, 2))
+    v = disc_velocity(a, np.ones(1000))
+    assert (np.linalg.norm(v, axis=-1) <= 1 + 1e-12).all()
+    np.testing.assert_allclose(np.linalg.norm(disc_velocity(np.array([[1.0, 1.0]]), np.ones(1)), axis=-1), 1.0)
+    env = crowdbench.parallel_env(num_humans=3)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="action for 'human_1'.*valid choices: two numbers in \\[-1, 1\\]"):
+        env.step({"robot": np.zeros(2), "human_1": np.array([1.5, 0.0])})
+    p0, vmax = env.world.pos[0, 2].copy(), env.world.v_pref[0, 2]
+    env.step({"robot": np.zeros(2), "human_1": np.array([1.0, 1.0])})  # the corner: full speed, diagonal
+    assert np.linalg.norm(env.world.pos[0, 2] - p0) == pytest.approx(vmax * 0.25)
+
+
+def test_progress_reward_pays_walking_to_the_goal_more_than_walking_away():
+    env = crowdbench.parallel_env(num_humans=4, robot=None, human_reward="progress")
+    env.reset(seed=2)
+    w = env.world
+    to_goal = w.goal[0, 1] - w.pos[0, 1]
+    toward = to_goal / np.abs(to_goal).max()
+    _, r_to, _, _, info = env.step({"human_0": toward, "human_1": np.zeros(2)})
+    env.reset(seed=2)
+    _, r_away, _, _, _ = env.step({"human_0": -toward, "human_1": np.zeros(2)})
+    assert r_to["human_0"] > 0 > r_away["human_0"]
+    assert set(info["human_0"]["reward_terms"]) == {"progress", "goal", "collision", "intrusion", "time"}
+    with pytest.raises(ValueError, match="unknown pedestrian reward 'fast'; valid choices: none, progress"):
+        crowdbench.parallel_env(human_reward="fast")
+
+
+def test_no_robot_and_max_cycles_mean_what_pettingzoo_says():
+    env = crowdbench.parallel_env(num_humans=20, robot=None, max_cycles=400)
+    obs, _ = env.reset(seed=0)
+    assert "robot" not in env.possible_agents and "robot" not in obs
+    steps = 0
+    while env.agents:
+        env.step({})
+        steps += 1
+    assert steps == 400  # not cut at the 50 s time limit
+    with pytest.raises(ValueError, match="robot='drone'; valid choices: 'agent', None, or a registered robot"):
+        crowdbench.parallel_env(robot="drone")
+
+
+def test_supersuit_vectorises_the_flat_env_across_processes():
+    ss = pytest.importorskip("supersuit")
+    venv = ss.concat_vec_envs_v1(ss.pettingzoo_env_to_vec_env_v1(crowdbench.parallel_env(num_humans=10,
+                                                                                          flat_observations=True)),
+                                 2, num_cpus=2, base_class="gymnasium")
+    obs, _ = venv.reset(seed=0)
+    assert obs.shape == (22, 189)
+    for _ in range(200):
+        obs, rew, term, trunc, _ = venv.step(np.stack([venv.action_space.sample() for _ in range(venv.num_envs)]))
+    assert np.isfinite(obs).all() and rew.shape == (22,)
+    venv.close()
