@@ -284,6 +284,31 @@ def crowd_validate_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def train_crowd_cmd(args: argparse.Namespace) -> int:
+    """Train the shared pedestrian policy (:mod:`crowdbench.training.crowd`) → ``OUT/learned_crowd.pt``."""
+    from crowdbench.training.crowd import CrowdTrainConfig, train
+
+    cfg = CrowdTrainConfig(seed=args.seed, worlds=args.worlds, iterations=args.iterations, threads=args.threads)
+    train(cfg, args.out)
+    print(f"wrote {os.path.join(args.out, 'learned_crowd.pt')} and history.json")
+    return 0
+
+
+def crowd_stats_cmd(args: argparse.Namespace) -> int:
+    """Goal arrivals and contacts of pedestrian models in robot-free episodes (:mod:`crowdbench.humans.crowd_stats`)."""
+    from crowdbench.humans.crowd_stats import crowd_stats
+
+    rows = [crowd_stats(m.strip(), range(args.seed, args.seed + args.episodes), args.humans, args.max_cycles)
+            for m in args.models.split(",") if m.strip()]
+    print("| model | episodes | arrivals / episode | contact steps / episode |\n|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['model']} | {r['episodes']} | {r['arrivals_per_episode']:.1f} | "
+              f"{r['contact_steps_per_episode']:.1f} |")
+    if args.json:
+        write_text(args.json, json.dumps(rows, indent=2) + "\n")
+    return 0
+
+
 def paper_cmd(args: argparse.Namespace) -> int:
     """Every stored board cell beside the paper's number (:mod:`crowdbench.paper`); reads cells, runs nothing."""
     from crowdbench import paper
@@ -519,6 +544,22 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--scenes", default=None, help="comma-separated subset of eth,hotel,univ,zara1,zara2 (default all)")
     p.add_argument("--json", default=None, help="write {scene: {model: {ade, fde, samples}}} to this file")
     p.set_defaults(func=crowd_validate_cmd)
+    p = sub.add_parser("train-crowd", help="train the learned_crowd pedestrian policy (rsl-rl PPO, every pedestrian "
+                                          "a row of the batch)")
+    p.add_argument("--out", default="runs/learned-crowd")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--worlds", type=int, default=32)
+    p.add_argument("--iterations", type=int, default=300)
+    p.add_argument("--threads", type=int, default=1)
+    p.set_defaults(func=train_crowd_cmd)
+    p = sub.add_parser("crowd-stats", help="goal arrivals and contacts of pedestrian models, no robot")
+    p.add_argument("--models", default="orca,social_force,learned_crowd")
+    p.add_argument("--episodes", type=int, default=10)
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--humans", type=int, default=20)
+    p.add_argument("--max-cycles", type=int, default=400)
+    p.add_argument("--json", default=None)
+    p.set_defaults(func=crowd_stats_cmd)
     p = sub.add_parser("plot", help="success trends of `tables` result files (ablation figure)")
     p.add_argument("results", nargs="+", help="JSON files written by `crowdbench tables --json`")
     p.add_argument("--out", default="trends.png")

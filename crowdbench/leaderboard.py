@@ -6,7 +6,9 @@ Cells (500 episodes each by default, latent-responsive ORCA pedestrians, δ = 0.
 * Table II — circle crossing, ρ = 0 (non-responsive regime), N ∈ {10, 20, 30};
 * Table III — unseen layouts (intersection, split flow, random wander), 30 pedestrians, ρ ∈ {0.7, 0.5, 0.3};
 * Table IV — real crowds: the five ETH/UCY scenes, recorded people replayed blind to the robot (``replay``) or
-  avoiding it and rejoining their paths (``reactive_replay``), slots for the scene's peak crowd.
+  avoiding it and rejoining their paths (``reactive_replay``), slots for the scene's peak crowd;
+* Table V — crowd-model shift: circle crossing, 20 pedestrians of each model of :data:`SHIFT_MODELS` (every
+  method was trained among latent-responsive ORCA pedestrians).
 
 Each cell uses evaluation seed S (episode k ↔ world seed S + k), so every policy meets exactly the same crowds.
 """
@@ -30,7 +32,9 @@ from crowdbench.policies import make_policy
 REGIMES = {"High": 0.7, "Medium": 0.5, "Low": 0.3}
 
 
-TABLES = ("I", "II", "III", "IV")
+TABLES = ("I", "II", "III", "IV", "V")
+SHIFT_MODELS = ("responsive_orca", "orca", "social_force", "learned_crowd")
+"""Table V's crowds: the training crowd (latent-responsive ORCA, ρ = 0.5) and three others."""
 
 
 @dataclass(frozen=True)
@@ -57,6 +61,9 @@ def cells(tables: tuple[str, ...] = ("I", "II", "III")) -> list[Cell]:
     if "III" in tables:
         out += [Cell("III", f"{lay} {name}", lay, 30, rho) for lay in ("intersection", "split_flow", "random_wander")
                 for name, rho in REGIMES.items()]
+    if "V" in tables:
+        out += [Cell("V", m if m != "responsive_orca" else "responsive_orca ρ=0.5", "circle_crossing", 20,
+                     0.5 if m == "responsive_orca" else 0.0, m) for m in SHIFT_MODELS]
     if "IV" in tables:
         out += [Cell("IV", f"{scene} {model}", scene, peak, 0.0, model) for scene, peak in PEAK.items()
                 for model in ("replay", "reactive_replay")]
@@ -400,6 +407,8 @@ TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
                 "II": "Table II — crowd size (circle crossing, non-responsive ρ = 0)",
                 "III": "Table III — unseen layouts (N = 30; trained on circle crossing only; pooled = the three "
                        "layouts together, the paper's presentation)",
+                "V": "Table V — crowd-model shift (circle crossing, N = 20; the learned methods were trained among "
+                     "latent-responsive ORCA pedestrians)",
                 "IV": "Table IV — real crowds (ETH/UCY test recordings, slots for each scene's peak crowd; replay: "
                       "people as recorded, blind to the robot; reactive_replay: they avoid the robot, then rejoin "
                       "their paths); PS = personal-space compliance [%]"}

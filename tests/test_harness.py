@@ -61,16 +61,17 @@ def users_policies():
 
 def test_shipped_suites_load_and_bad_suites_are_one_clear_error(tmp_path):
     paper = harness.load_suite("paper")
-    assert paper.episodes == 500 and len(paper.grid()) == 15 and paper.counterfactual
+    assert paper.episodes == 500 and len(paper.grid()) == 25 and paper.counterfactual  # Tables I–III and IV
+    assert paper.check_seed == 100000
     assert harness.load_suite("quick", episodes=7).episodes == 7
     bad = tmp_path / "bad.toml"
     bad.write_text('episodes = 5\ntabels = ["I"]\n')
     with pytest.raises(ValueError, match=r"unknown keys \['tabels'\]; valid choices"):
         harness.load_suite(str(bad))
-    with pytest.raises(ValueError, match="valid choices: paper, quick"):
+    with pytest.raises(ValueError, match="valid choices: paper, quick, shift"):
         harness.load_suite("nope")
     with pytest.raises(ValueError, match="tables"):
-        suite(tables=("IV",))
+        suite(tables=("VI",))
     with pytest.raises(ValueError, match="rows"):
         suite(rows=("II/N=11",))
     assert [c.row for c in suite(rows=("II/N=20",)).grid()] == ["N=20"]

@@ -69,6 +69,18 @@ def disc_velocity(action: np.ndarray, v_max: np.ndarray) -> np.ndarray:
     return v * np.asarray(v_max)[..., None]
 
 
+def square(v: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`disc_velocity` for ``v_max = 1``: points ``(..., 2)`` of the unit disc → the normalised
+    actions in [−1, 1]² that map onto them (the elliptical grid map's inverse, Fong 2015)."""
+    u, w = v[..., 0], v[..., 1]
+    s = u * u - w * w
+    t1 = np.sqrt(np.maximum(2.0 + s + 2.0 * np.sqrt(2.0) * u, 0.0))
+    t2 = np.sqrt(np.maximum(2.0 + s - 2.0 * np.sqrt(2.0) * u, 0.0))
+    t3 = np.sqrt(np.maximum(2.0 - s + 2.0 * np.sqrt(2.0) * w, 0.0))
+    t4 = np.sqrt(np.maximum(2.0 - s - 2.0 * np.sqrt(2.0) * w, 0.0))
+    return np.clip(np.stack([0.5 * (t1 - t2), 0.5 * (t3 - t4)], -1), -1.0, 1.0)
+
+
 def check_normalised(agent: str, action: np.ndarray) -> np.ndarray:
     """``action`` as a float64 ``(2,)`` inside [−1, 1]², else one ``ValueError`` naming the agent."""
     a = np.asarray(action, dtype=np.float64).reshape(2)

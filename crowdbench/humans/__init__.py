@@ -14,6 +14,7 @@ from crowdbench.humans.social_force import SocialForce
 
 HUMAN_MODELS.register("replay", "crowdbench.humans.replay:Replay")  # recorded people (eth, hotel, univ, zara1, zara2)
 HUMAN_MODELS.register("reactive_replay", "crowdbench.humans.replay:ReactiveReplay")
+HUMAN_MODELS.register("learned_crowd", "crowdbench.humans.learned:LearnedCrowd")  # trained: crowdbench train-crowd
 
 __all__ = ["HUMAN_MODELS", "ORCA", "ORCAParams", "CrowdState", "HumanModel", "Linear", "PyRVOSimulator",
            "ResponsiveORCA", "SocialForce", "make", "preferred_velocity", "register"]

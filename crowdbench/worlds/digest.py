@@ -31,5 +31,7 @@ def crowd_digest(layouts: tuple[str, ...] = ("circle_crossing",), models: tuple[
         m = make_model(name)
         part = repr(getattr(m, "params", None)) + repr(sorted((k, v) for k, v in vars(m).items()
                                                             if isinstance(v, float)))
-        parts.append(part if name == "responsive_orca" else f"{name}: {part}")
+        if name != "responsive_orca":  # e.g. a learned crowd's weights (the training crowd's digest stays as it was)
+            part = f"{name}: {part}{getattr(m, 'fingerprint', '')}"
+        parts.append(part)
     return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:16]

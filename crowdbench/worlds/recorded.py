@@ -7,7 +7,7 @@ positions; nothing stops a simulated pedestrian from leaving it, as nothing stop
 * **Robot** (every model): it crosses the scene's busy area — the mean of all recorded positions, ``centre`` — along
   a uniformly random direction θ: start ``centre − L·u(θ)``, goal ``centre + L·u(θ)``, with ``L`` the largest
   half-length ≤ ``robot_half_length`` (6 m) keeping both ends inside the walkable box shrunk by 0.5 m; directions
-  with ``L`` < 2.5 m are redrawn (bounded).
+  with ``L`` < 2.5 m, or ends within 0.1 m of an obstacle added through the config, are redrawn (bounded).
 * **Pedestrians with the ``replay`` / ``reactive_replay`` models** are the recorded people of a 60 s window drawn per
   episode (:mod:`crowdbench.humans.replay`); ``num_humans`` is then the number of *slots* — a cap on how many recorded
   people can be present at once (a person who finds every slot taken is left out; :data:`PEAK` gives each scene's
@@ -58,18 +58,26 @@ class RecordedScene(Layout):
         self.half_size = float(np.abs(np.concatenate([self.lo, self.hi])).max()) + 1.0
 
     def robot_endpoints(self, rng, edges, radius):
+        from crowdbench.geometry import point_segment_distance
+
         lo, hi = self.lo + 0.5, self.hi - 0.5
         c = np.clip(self.centre, lo, hi)
-        for _ in range(64):
+        for _ in range(256):
             th = rng.uniform(0.0, 2 * math.pi)
             u = np.array([math.cos(th), math.sin(th)])
             limit = self.robot_half_length
             for k in range(2):  # both ends inside the box: |c_k ± L·u_k| within [lo_k, hi_k]
                 if abs(u[k]) > 1e-12:
                     limit = min(limit, (hi[k] - c[k]) / abs(u[k]), (c[k] - lo[k]) / abs(u[k]))
-            if limit >= 2.5:
-                return c - limit * u, c + limit * u
-        raise ValueError(f"layout {self.name!r}: no robot crossing of ≥ 5 m fits the scene")
+            if limit < 2.5:
+                continue
+            ends = np.stack([c - limit * u, c + limit * u])
+            if edges is not None and len(edges):  # clear of any extra obstacle, as every layout's robot
+                d = point_segment_distance(ends[:, None], edges[None, :, 0], edges[None, :, 1])
+                if (d <= radius + 0.1).any():
+                    continue
+            return ends[0], ends[1]
+        raise ValueError(f"layout {self.name!r}: no robot crossing of ≥ 5 m fits the scene clear of the obstacles")
 
     def candidates(self, rng, index, n, m):
         k = rng.integers(0, len(self.person_starts), m)
