@@ -300,10 +300,13 @@ def crowd_stats_cmd(args: argparse.Namespace) -> int:
 
     rows = [crowd_stats(m.strip(), range(args.seed, args.seed + args.episodes), args.humans, args.max_cycles)
             for m in args.models.split(",") if m.strip()]
-    print("| model | episodes | arrivals / episode | contact steps / episode |\n|---|---|---|---|")
+    print("| model | episodes | arrivals / episode | contact steps / episode | collisions / ped-min | time to goal "
+          "[s] | irregularity [rad/step] | speed p50 / p95 [m/s] |\n|---|---|---|---|---|---|---|---|")
     for r in rows:
         print(f"| {r['model']} | {r['episodes']} | {r['arrivals_per_episode']:.1f} | "
-              f"{r['contact_steps_per_episode']:.1f} |")
+              f"{r['contact_steps_per_episode']:.1f} | {r['collisions_per_ped_minute']:.3f} | "
+              f"{r['time_to_goal_s']:.1f} | {r['path_irregularity_rad']:.3f} | {r['speed_p50']:.2f} / "
+              f"{r['speed_p95']:.2f} |")
     if args.json:
         write_text(args.json, json.dumps(rows, indent=2) + "\n")
     return 0

@@ -161,4 +161,30 @@ def train(cfg: CrowdTrainConfig, out: str, quiet: bool = False) -> dict[str, Any
 
     checkpoints.save(ckpt, os.path.join(out, "learned_crowd.pt"))
     write_text(os.path.join(out, "history.json"), json.dumps(history, indent=1) + "\n")
+    plot_history(history, os.path.join(out, "curve.png"))
     return ckpt
+
+
+def plot_history(history: list[dict[str, float]], path: str) -> None:
+    """The training curve: goal arrivals and contacts per 1,000 pedestrian-steps (stochastic policy) against
+    iterations, written atomically as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from crowdbench.io import atomic_path
+
+    it = [h["iteration"] for h in history]
+    fig, ax = plt.subplots(figsize=(6, 3.2))
+    ax.plot(it, [h["Crowd/arrivals_per_1k_steps"] for h in history], label="goal arrivals")
+    ax.plot(it, [h["Crowd/contacts_per_1k_steps"] for h in history], label="pedestrians in contact")
+    ax.set_xlabel("PPO iteration")
+    ax.set_ylabel("per 1,000 pedestrian-steps")
+    ax.set_yscale("log")
+    ax.legend()
+    ax.set_title("learned_crowd training (stochastic policy)")
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, format="png", dpi=120)
+    plt.close(fig)
