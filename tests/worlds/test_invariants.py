@@ -9,9 +9,8 @@ from hypothesis import strategies as st
 
 from crowdbench.config import make_config
 from crowdbench.humans import HUMAN_MODELS
-from crowdbench.worlds import LAYOUTS, CrowdWorld
-
 from crowdbench.humans.learned import CHECKPOINT
+from crowdbench.worlds import LAYOUTS, CrowdWorld
 
 BUILT_IN_MODELS = tuple(m for m in HUMAN_MODELS.names()  # at collection, before any test registers a plug-in
                         if m != "learned_crowd" or CHECKPOINT.exists())
