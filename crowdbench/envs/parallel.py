@@ -55,7 +55,7 @@ from crowdbench.robots.observations import (
     human_observation_space,
     make_observation,
 )
-from crowdbench.worlds._kernels import agent_observations_batch
+from crowdbench.worlds._kernels import agent_observations_batch, drive_actions
 from crowdbench.worlds.world import PARK
 
 ROBOT_MODES = ("agent", None, "a registered robot policy name")
@@ -209,26 +209,27 @@ class CrowdParallelEnv(ParallelEnv):
 
     def _human_actions(self, actions: dict[str, Any]) -> tuple[np.ndarray | None, np.ndarray | None]:
         """The driven pedestrians' velocities ``(1, H, 2)`` and mask ``(1, H)`` (None, None when nobody is driven);
-        one vectorised check and map for all of them."""
+        one compiled check and map for all of them (:func:`~crowdbench.worlds._kernels.drive_actions`)."""
         keys = [a for a, act in actions.items() if a != "robot" and act is not None and a not in self._done]
         if not keys:
             return None, None
-        live = self._live
-        bad = [a for a in keys if a not in live]
-        if bad:
-            raise ValueError(f"action for {bad[0]!r}, which is not a live agent; live agents: {self.agents}")
+        slot = self._slot
+        try:
+            idx = np.fromiter((slot[k] for k in keys), dtype=np.int64, count=len(keys))
+        except KeyError:
+            idx = None
+        if idx is None or any(k not in self._live for k in keys):
+            bad = next(k for k in keys if k not in self._live)
+            raise ValueError(f"action for {bad!r}, which is not a live agent; live agents: {self.agents}")
         try:
             a = np.asarray([actions[k] for k in keys], dtype=np.float64).reshape(len(keys), 2)
         except ValueError:
             raise ValueError("pedestrian actions: valid choices are two numbers in [-1, 1] per agent") from None
-        ok = np.isfinite(a).all(axis=1) & (np.abs(a) <= 1.0 + 1e-6).all(axis=1)
-        if not ok.all():
-            check_normalised(keys[int(np.flatnonzero(~ok)[0])], a[~ok][0])  # raises, naming the agent
-        idx = np.fromiter((self._slot[k] for k in keys), dtype=np.int64, count=len(keys))
         H = self.world.num_humans
         human_actions, override = np.zeros((1, H, 2)), np.zeros((1, H), dtype=bool)
-        human_actions[0, idx] = disc_velocity(np.clip(a, -1.0, 1.0), self.world.v_pref[0, idx + 1])
-        override[0, idx] = True
+        bad_row = drive_actions(a, idx, self.world.v_pref[0, 1:], human_actions[0], override[0])
+        if bad_row >= 0:
+            check_normalised(keys[bad_row], a[bad_row])  # raises, naming the agent
         return human_actions, override
 
     def _robot_action(self, actions: dict[str, Any]) -> np.ndarray:

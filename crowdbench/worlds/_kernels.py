@@ -14,6 +14,7 @@ it bit for bit (``tests/worlds/test_kernels.py``):
   :func:`one_world_observations`;
 * :func:`agent_observations_batch` — every agent's (robot included) observation in the pedestrians' layout, all
   worlds at once (the multi-agent interfaces);
+* :func:`drive_actions` — externally driven pedestrians' normalised actions to velocities (checked);
 * :func:`crowd_clearance` — each pedestrian's nearest surface distance and contacts (pedestrian rewards);
 * :func:`first_clear` — the first re-spawn candidate clear of everyone (reference: ``reference.first_clear``).
 * :func:`spawn_clear`, :func:`change_goals` — CrowdNav++'s spawn and goal-change clearance (reference:
@@ -406,6 +407,25 @@ def crowd_clearance(pos, radius, active, robot_visible, nearest, touch_ped, touc
                         else:
                             tp = True
             nearest[b, i - 1], touch_ped[b, i - 1], touch_robot[b, i - 1] = near, tp, tr
+
+
+@nb.njit(cache=True, error_model="numpy")
+def drive_actions(actions, slots, v_max, velocities, driven):  # pragma: no cover - numba
+    """Normalised actions ``(k, 2)`` of the pedestrians ``slots`` ``(k,)`` → their velocities in ``velocities``
+    ``(H, 2)`` [m/s] (the elliptical grid map onto each disc of radius ``v_max[slot]``) and ``driven[slot] = True``.
+    Returns the row of the first action outside [−1, 1]² or not finite (nothing written then), else −1."""
+    k = actions.shape[0]
+    for i in range(k):
+        x, y = actions[i, 0], actions[i, 1]
+        if not (abs(x) <= 1.0 + 1e-6 and abs(y) <= 1.0 + 1e-6):  # also false for NaN
+            return i
+    for i in range(k):
+        x, y = min(max(actions[i, 0], -1.0), 1.0), min(max(actions[i, 1], -1.0), 1.0)
+        h = slots[i]
+        velocities[h, 0] = v_max[h] * x * math.sqrt(1.0 - 0.5 * y * y)
+        velocities[h, 1] = v_max[h] * y * math.sqrt(1.0 - 0.5 * x * x)
+        driven[h] = True
+    return -1
 
 
 @nb.njit(cache=True, error_model="numpy")
