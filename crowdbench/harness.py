@@ -338,7 +338,7 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
         write_text(os.path.join(out, f"{e.slug}.json"), json.dumps(doc, indent=2) + "\n")
         write_text(os.path.join(out, f"{e.slug}.md"), markdown(rows))
     everyone, groups, planners, every_fp = gather(out, suite, board, {e.label: e.group for e in entries},
-                                                  {e.label: fps[e.label] for e in entries})
+                                                  {e.label: fps[e.label] for e in entries}, only=True)
     from crowdbench.leaderboard import STALE
 
     write_text(os.path.join(out, "LEADERBOARD.md"),
@@ -354,10 +354,10 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
 
 
 def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], groups: dict[str, str],
-           fingerprints: dict[str, dict[str, Any]]
+           fingerprints: dict[str, dict[str, Any]], only: bool = False
            ) -> tuple[dict[str, list[dict[str, Any]]], dict[str, str], frozenset[str], dict[str, dict[str, Any]]]:
-    """The run's ``board`` plus every other method file in ``out`` scored on the same suite (same digest), so a run
-    of some methods leaves the others on ``LEADERBOARD.md``; in leaderboard order (:data:`~crowdbench.leaderboard.
+    """The run's ``board`` plus (unless ``only``: ``LEADERBOARD.md`` shows the methods asked for) every other method
+    file in ``out`` scored on the same suite (same digest); in leaderboard order (:data:`~crowdbench.leaderboard.
     METHODS`, each method's other training seeds after it, then the rest by label). Returns rows, groups, the
     planners (labels whose fingerprint has no checkpoint) and every label's fingerprint (``fingerprints`` for the
     run's entries, the stored one otherwise)."""
@@ -370,6 +370,8 @@ def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], group
         except (OSError, ValueError):
             continue
         meta = d.get("meta") if isinstance(d, dict) else None
+        if only and isinstance(meta, dict) and meta.get("label") not in board:
+            continue
         if isinstance(meta, dict) and meta.get("suite_digest") == suite.digest() and "label" in meta:
             rows[meta["label"]] = d["results"]
             groups.setdefault(meta["label"], meta.get("group", "main"))

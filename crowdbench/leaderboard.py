@@ -20,6 +20,7 @@ import json
 import math
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -379,14 +380,48 @@ def scenario_digest(tables: tuple[str, ...] = ("I", "II", "III")) -> str:
     return crowd_digest(tuple(sorted({c.layout for c in grid})), tuple(sorted({c.model for c in grid})))
 
 
+def policy_code(policy: str) -> str:
+    """SHA-256 (16 hex digits) of the source a registered robot policy runs: the file defining its class and every
+    base class (outside the standard library and torch), plus every ``.py`` file of a method sub-package
+    (``crowdbench/policies/<method>/``) among them — a plug-in's own files included. A stored cell is stale once
+    any of them changes."""
+    import hashlib
+    import inspect
+
+    from crowdbench.policies import POLICIES
+
+    factory = POLICIES.get(policy)
+    files: set[Path] = set()
+    for cls in inspect.getmro(factory) if inspect.isclass(factory) else (factory,):
+        if getattr(cls, "__module__", "").split(".")[0] in ("builtins", "abc", "typing", "torch", "collections"):
+            continue
+        try:
+            src = inspect.getsourcefile(cls)
+        except TypeError:
+            continue
+        if src is None:
+            continue
+        path = Path(src).resolve()
+        files.add(path)
+        pkg = Path(__file__).resolve().parent / "policies"
+        if path.parent.parent == pkg:  # a method sub-package: all of it
+            files.update(path.parent.glob("*.py"))
+    h = hashlib.sha256()
+    for path in sorted(files):
+        h.update(path.name.encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
 def entry_sensing(entry: Entry) -> str:
     """The sensing tier of an entry's policy (built with its arguments: a checkpoint may set it)."""
     return make_policy(entry.policy, **entry.policy_kwargs()).sensing
 
 
 def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
-    """What a cached result must match to be reused: policy, arguments, sensing tier, checkpoint contents, episodes,
-    seed, and the scenario (:func:`scenario_digest`)."""
+    """What a cached result must match to be reused: policy, arguments, sensing tier, checkpoint contents, the
+    policy's source (:func:`policy_code`), the crowdbench version, episodes, seed, and the scenario
+    (:func:`scenario_digest`)."""
     import os
 
     from crowdbench import checkpoints
@@ -399,8 +434,11 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
     if ckpt and os.path.exists(ckpt):
         digest = checkpoints.file_sha256(ckpt)
     shown = {k: (v if k != "checkpoint" or not os.path.exists(v) else os.path.relpath(v)) for k, v in kwargs.items()}
+    from crowdbench import __version__
+
     return {"policy": entry.policy, "kwargs": shown, "sensing": entry_sensing(entry), "checkpoint_sha256": digest,
-            "episodes": episodes, "seed": seed, "scenario": scenario_digest()}
+            "code": policy_code(entry.policy), "crowdbench": __version__, "episodes": episodes, "seed": seed,
+            "scenario": scenario_digest()}
 
 
 TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",

@@ -144,12 +144,15 @@ def test_workers_give_identical_files(tmp_path):
     for name in ("orca.json", "social_force.json"):
         assert stable(tmp_path / "one" / name) == stable(tmp_path / "two" / name)
     assert (tmp_path / "one" / "LEADERBOARD.md").read_text() == (tmp_path / "two" / "LEADERBOARD.md").read_text()
-    # running one method at a time gathers the same board (every method file of the suite in the folder)
+    # one method at a time, then both: the stored cells are reused and the board is the same; a run shows the methods
+    # asked for only
     harness.run(suite(), entries[1:], str(tmp_path / "three"))
     harness.run(suite(), entries[:1], str(tmp_path / "three"))
-    assert (tmp_path / "three" / "LEADERBOARD.md").read_text() == (tmp_path / "one" / "LEADERBOARD.md").read_text()
-    harness.run(suite(episodes=3), entries[:1], str(tmp_path / "three"))  # another suite: not mixed in
     assert "| social_force |" not in (tmp_path / "three" / "LEADERBOARD.md").read_text()
+    lines: list[str] = []
+    harness.run(suite(), entries, str(tmp_path / "three"), progress=lines.append)
+    assert "6 stored, 0 to run" in lines[0]
+    assert (tmp_path / "three" / "LEADERBOARD.md").read_text() == (tmp_path / "one" / "LEADERBOARD.md").read_text()
 
 
 def test_a_killed_run_resumes_without_losing_or_recomputing_a_cell(tmp_path):
@@ -210,3 +213,47 @@ def test_render_writes_one_episode_of_any_policy(tmp_path, capsys):
                  "--out", str(out)]) == 0
     frames = Image.open(out).n_frames
     assert frames >= 2 and f"frames={frames}" in capsys.readouterr().out
+
+
+def test_an_edited_outside_policy_is_re_evaluated_and_an_unchanged_one_reused(tmp_path, monkeypatch):
+    """Stored cells are trusted only while the policy's code is the same (its source file is in the fingerprint);
+    LEADERBOARD.md shows the methods asked for."""
+    import importlib.util
+    import sys
+
+    from crowdbench.policies import POLICIES
+
+    src = tmp_path / "my_planner.py"
+
+    def load(speed: float):
+        src.write_text("import numpy as np\nfrom crowdbench.policies.base import RobotPolicy\n\n\n"
+                       "class Mine(RobotPolicy):\n    def act(self, obs):\n"
+                       "        r = obs['robot']\n        d = r[:, 3:5] - r[:, 0:2]\n"
+                       f"        return {speed} * d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)\n")
+        spec = importlib.util.spec_from_file_location("my_planner", src)
+        mod = importlib.util.module_from_spec(spec)
+        monkeypatch.setitem(sys.modules, "my_planner", mod)
+        spec.loader.exec_module(mod)
+        POLICIES.register("mine_tmp", mod.Mine, overwrite=True)
+
+    monkeypatch.setattr(POLICIES, "_factories", dict(POLICIES._factories))
+    s = suite(rows=("II/N=10",), episodes=6, worlds=6)
+    entries = [leaderboard.Entry("mine_tmp", "mine_tmp")]
+    out = str(tmp_path / "board")
+    lines: list[str] = []
+    load(1.0)
+    first = harness.run(s, entries, out, progress=lines.append)["mine_tmp"][0]
+    load(1.0)  # unchanged source: nothing re-evaluated
+    lines.clear()
+    harness.run(s, entries, out, progress=lines.append)
+    assert "1 stored, 0 to run" in lines[0]
+    load(0.3)  # edited: the cell is re-evaluated and the row shows the edited policy
+    lines.clear()
+    second = harness.run(s, entries, out, progress=lines.append)["mine_tmp"][0]
+    assert "0 stored, 1 to run" in lines[0]
+    assert second["nav_time"] != first["nav_time"] or second["success_rate"] != first["success_rate"]
+    board = (tmp_path / "board" / "LEADERBOARD.md").read_text()
+    assert "| mine_tmp |" in board
+    harness.run(s, [leaderboard.ENTRIES["orca"]], out)
+    board = (tmp_path / "board" / "LEADERBOARD.md").read_text()
+    assert "| orca |" in board and "mine_tmp" not in board  # the methods asked for
