@@ -57,6 +57,14 @@ def demo(args: argparse.Namespace) -> int:
         path += float(np.linalg.norm(env.world.pos[0, 0] - start))
         frames.append(env.render())
     save_gif(frames, args.gif)
+    if getattr(args, "png", None):  # a still of the episode's middle (the README picture)
+        from PIL import Image
+
+        from crowdbench.io import atomic_path
+
+        with atomic_path(args.png, suffix=".png") as tmp:
+            Image.fromarray(frames[len(frames) // 2]).save(tmp, format="PNG")
+        print(f"wrote {args.png}")
     print(f"layout={args.layout} humans={args.humans} model={args.human_model} policy={args.policy} seed={args.seed}")
     print(f"outcome={info['outcome']} time={info['time']:.2f}s path_length={path:.2f}m frames={len(frames)}")
     print(f"wrote {args.gif}")
@@ -422,6 +430,9 @@ def main(argv: list[str] | None = None) -> int:
     _common(p)
     p.add_argument("--checkpoint", default=None, help="checkpoint of a checkpoint-backed policy")
     p.add_argument("--gif", default="demo.gif", help="output GIF path")
+    p.add_argument("--png", default=None, help="also write the episode's middle frame as a PNG (docs/demo.png: "
+                                               "`crowdbench demo --responsiveness 0.5 --gif docs/demo.gif --png "
+                                               "docs/demo.png`)")
     p.set_defaults(func=demo)
     p = sub.add_parser("render", help="one episode of any policy as an animated GIF (same as demo, policy first)")
     _common(p)
