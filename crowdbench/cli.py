@@ -481,7 +481,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="processes stepping the worlds (default 2; results are identical for any value)")
     p.add_argument("--epochs", type=int, default=None,
                    help="PPO epochs per iteration (default 4; fewer run faster but learned less per step: "
-                        "leaderboards/schedule-study)")
+                        "studies/crowdbench-0.2/schedule-study)")
     p.add_argument("--mini-batches", type=int, default=None, help="PPO mini-batches per epoch (default 4)")
     p.add_argument("--reward-scale", type=float, default=None,
                    help="factor on the rewards PPO sees (default 0.1; 1 = the originals' unscaled rewards)")

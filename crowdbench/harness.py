@@ -186,7 +186,7 @@ def cell_key(cell: Cell) -> str:
 def run_cell(entry: Entry, cell: Cell, suite: Suite) -> dict[str, Any]:
     """Evaluate one cell, isolating faults: ``{"result": row, "cpu": model}`` or ``{"error": "Type: message", ...}``.
     ``cpu`` names the machine's CPU: a learned policy's closed loop can differ in the last bits between instruction
-    sets (``leaderboards/README.md``), and with Ray the cells of one method may run on different machines."""
+    sets (``docs/leaderboard/index.md``), and with Ray the cells of one method may run on different machines."""
     from crowdbench.bench import cpu_model
     from crowdbench.leaderboard import evaluate_cells
 

@@ -383,7 +383,7 @@ class CircleCrossingCalibrated(Layout):
 class CircleCrossingLegacy(CircleCrossingCalibrated):
     """crowdbench's original circle crossing, kept for comparison: circle radius 6 m, noise ±0.5 m, the robot always
     from (0, −6) to (0, 6) on the pedestrians' own ring, pedestrians turn round near the antipode on arrival, no
-    random goal changes. A learned policy can memorise one route here (see ``leaderboards/README.md``)."""
+    random goal changes. A learned policy can memorise one route here (``studies/crowdbench-0.2/README.md``)."""
 
     name = "circle_crossing_legacy"
 

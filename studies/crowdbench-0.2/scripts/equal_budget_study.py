@@ -15,20 +15,20 @@ on each DS-RNN recipe:
 
 * ``dsrnn-original-5.85M-seed0``: the original recipe — AIG-GST's — resumed from the committed 3.23 M state::
 
-    crowdbench train dsrnn --resume leaderboards/checkpoints/in-progress/dsrnn-small-seed0.pt
+    crowdbench train dsrnn --resume studies/crowdbench-0.2/checkpoints/in-progress/dsrnn-small-seed0.pt
         --out runs/eq/dsrnn-orig-seed0 --iterations 1016 --minutes 200 --env-processes 1 --threads 1
 
 * ``aig_gst[-seedK]``: the shipped AIG-GST checkpoints (5.85 M env steps each).
 
-Each DS-RNN run's ``last.pt`` is committed as ``leaderboards/checkpoints/equal-budget/<label>.pt`` (with its
+Each DS-RNN run's ``last.pt`` is committed as ``studies/crowdbench-0.2/checkpoints/equal-budget/<label>.pt`` (with its
 ``-history.json`` and ``-curve.png``).
 
 Each cell is ``crowdbench evaluate METHOD --checkpoint CKPT --humans 20 --responsiveness 0.5 --episodes 500 --seed S
 --worlds 100 --json FILE``; the script runs the ones whose FILE is missing and reuses the rest (delete them to
 re-evaluate).
 
-Usage: ``python scripts/equal_budget_study.py [--checkpoints DIR] [--cache runs/eq]
-[--out leaderboards/equal-budget-15.json]``.
+Usage: ``python studies/crowdbench-0.2/scripts/equal_budget_study.py [--checkpoints DIR] [--cache runs/eq]
+[--out studies/crowdbench-0.2/equal-budget-15.json]``.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ CELL = ["--humans", "20", "--responsiveness", "0.5", "--episodes", "500", "--wor
 STAGE1 = ("crowdbench train dsrnn --seed {s} --learning-rate 3e-4 --schedule adaptive --epochs 4 --mini-batches 4 "
           "--model learn_std=false --model action_std=0.3 --out runs/eq/dsrnn-s1-seed{s} --iterations 1016 "
           "--minutes 150 --env-processes 1 --threads 1")
-ORIGINAL = ("crowdbench train dsrnn --resume leaderboards/checkpoints/in-progress/dsrnn-small-seed0.pt "
+ORIGINAL = ("crowdbench train dsrnn --resume studies/crowdbench-0.2/checkpoints/in-progress/dsrnn-small-seed0.pt "
             "--out runs/eq/dsrnn-orig-seed0 --iterations 1016 --minutes 200 --env-processes 1 --threads 1")
 AIG = "crowdbench train aig_gst --variant small --seed {s} --env-processes 1 --threads 1 (resumed to 1,016 iterations)"
 
@@ -87,10 +87,10 @@ def checkpoint_steps(entry: dict[str, Any]) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--checkpoints", default="leaderboards/checkpoints/equal-budget",
+    ap.add_argument("--checkpoints", default="studies/crowdbench-0.2/checkpoints/equal-budget",
                     help="folder of the DS-RNN checkpoints (each run's last.pt, renamed)")
     ap.add_argument("--cache", default="runs/eq", help="folder of the evaluation files (made when missing)")
-    ap.add_argument("--out", default="leaderboards/equal-budget-15.json")
+    ap.add_argument("--out", default="studies/crowdbench-0.2/equal-budget-15.json")
     args = ap.parse_args(argv)
     from crowdbench.io import write_text
 
@@ -103,7 +103,8 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{e['label']:>28}: " + " / ".join(f"{100 * c['success_rate']:.1f}" for c in cells.values())
               + f" %  (mean {100 * mean:.1f} %)", file=sys.stderr)
     doc = {"what": __doc__.split("\n\n")[0].replace("\n", " "),
-           "command": "python scripts/equal_budget_study.py; each cell: crowdbench evaluate METHOD --checkpoint CKPT "
+           "command": "python studies/crowdbench-0.2/scripts/equal_budget_study.py; each cell: "
+                      "crowdbench evaluate METHOD --checkpoint CKPT "
                       + " ".join(CELL) + " --seed S --json FILE",
            "results": results}
     write_text(args.out, json.dumps(doc, indent=1) + "\n")

@@ -9,7 +9,8 @@ robot–pedestrian clearance taken at the end of each step instead of its minimu
 wrapped, not changed: the compiled ``motion`` and ``outcome`` kernels run as always, with ``d_min`` recomputed from
 the moved positions between them.
 
-Usage: ``python scripts/collision_semantics.py [OUT.json]`` (default ``leaderboards/collision-semantics.json``).
+Usage: ``python studies/crowdbench-0.2/scripts/collision_semantics.py [OUT.json]``
+(default ``studies/crowdbench-0.2/collision-semantics.json``).
 """
 
 from __future__ import annotations
@@ -59,7 +60,7 @@ def end_of_step_collisions():
         world_module.advance = swept
 
 
-def main(out: str = "leaderboards/collision-semantics.json") -> None:
+def main(out: str = "studies/crowdbench-0.2/collision-semantics.json") -> None:
     torch.set_num_threads(1)
     rows = {}
     for name, kw in POLICIES:

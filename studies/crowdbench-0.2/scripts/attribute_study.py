@@ -3,7 +3,8 @@ calibrated scenario's randomised radius U(0.3, 0.5) m and speed U(0.5, 1.5) m/s 
 with the speeds capped at 1 m/s as CrowdNav++'s ORCA walks its pedestrians (calibration step 7, not adopted)
 (evaluation only: the policies were trained with both randomised), 500 episodes per cell, evaluation seed 0.
 
-Usage: ``python scripts/attribute_study.py [OUT.json]`` (default ``leaderboards/attribute-study.json``).
+Usage: ``python studies/crowdbench-0.2/scripts/attribute_study.py [OUT.json]``
+(default ``studies/crowdbench-0.2/attribute-study.json``).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ SETTINGS = (("default (r U(.3,.5), v U(.5,1.5))", {}),
             ("speed capped 1.0 (CrowdNav++'s ORCA)", {"human_speed_cap": 1.0}))
 
 
-def main(out: str = "leaderboards/attribute-study.json") -> None:
+def main(out: str = "studies/crowdbench-0.2/attribute-study.json") -> None:
     torch.set_num_threads(1)
     rows = {}
     for name, kw in POLICIES:

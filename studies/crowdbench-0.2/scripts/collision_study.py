@@ -8,7 +8,8 @@ A collision with the robot moving away (angle > 90°) while the pedestrian close
 unresponsive pedestrian faster than the robot (the calibrated crowd walks at U(0.5, 1.5) m/s, the robot at most 1 m/s)
 walking into it.
 
-Usage: ``python scripts/collision_study.py [OUT.json] [--episodes N]`` (default ``leaderboards/collision-study.json``,
+Usage: ``python studies/crowdbench-0.2/scripts/collision_study.py [OUT.json] [--episodes N]``
+(default ``studies/crowdbench-0.2/collision-study.json``,
 300 episodes per policy, world seeds 10,000 + k).
 """
 
@@ -82,7 +83,7 @@ def collisions(policy_name: str, kwargs: dict, episodes: int, rho: float = 0.5) 
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    p.add_argument("out", nargs="?", default="leaderboards/collision-study.json")
+    p.add_argument("out", nargs="?", default="studies/crowdbench-0.2/collision-study.json")
     p.add_argument("--episodes", type=int, default=300)
     args = p.parse_args()
     torch.set_num_threads(1)

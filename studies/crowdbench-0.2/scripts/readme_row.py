@@ -1,6 +1,6 @@
 """Print a method's README row (Tables I and II, Table III pooled per ρ, Table I timeouts) from ``leaderboards/M.json``.
 
-Usage: ``python scripts/readme_row.py sarl``.
+Usage: ``python studies/crowdbench-0.2/scripts/readme_row.py sarl``.
 """
 
 from __future__ import annotations
