@@ -133,6 +133,8 @@ def train_cmd(args: argparse.Namespace) -> int:
     """Train a PPO method (H²INT or an ablation) with rsl-rl; checkpoints, curve and logs go to ``--out``."""
     from crowdbench.training.value import VALUE_METHODS
 
+    if args.seeds:
+        return train_seeds_cmd(args)
     if args.algo in VALUE_METHODS:
         return train_value_cmd(args)
     from crowdbench.training.config import RESUMABLE, TrainConfig
@@ -175,6 +177,24 @@ def train_cmd(args: argparse.Namespace) -> int:
     print(f"wrote {os.path.join(out, 'last.pt')} and {os.path.join(out, 'curve.png')} "
           f"({trainer.iteration} iterations, {trainer.env_steps:,} env steps, {trainer.elapsed / 60:.1f} min)")
     return 0
+
+
+def train_seeds_cmd(args: argparse.Namespace) -> int:
+    """``--seeds 0,1,2``: one run per seed (:mod:`crowdbench.training.seeds`), under ``OUT/seedS``."""
+    from crowdbench.training.seeds import run_seeds, seed_commands
+
+    try:
+        seeds = [int(s) for s in args.seeds.split(",") if s.strip()]
+    except ValueError:
+        raise ValueError(f"--seeds {args.seeds!r}; valid choices: comma-separated integers, e.g. 0,1,2") from None
+    if not seeds or len(set(seeds)) != len(seeds) or args.resume or args.init:
+        raise ValueError(f"--seeds {args.seeds!r}: distinct integers, for new runs (not with --resume/--init)")
+    out = args.out or os.path.join("runs", f"{args.algo}-seeds")
+    commands = seed_commands(args.argv, seeds, out)
+    codes = run_seeds(commands, args.backend, args.seed_workers, args.ray_address)
+    for s, code in zip(seeds, codes, strict=True):
+        print(f"seed {s}: {'done' if code == 0 else f'exit {code}'} → {os.path.join(out, f'seed{s}')}")
+    return max(codes)
 
 
 VALUE_ONLY = ("worlds", "il_episodes", "rl_episodes", "free_space", "sensing")
@@ -465,6 +485,13 @@ def main(argv: list[str] | None = None) -> int:
                    help="architecture field over the variant's (repeatable), e.g. --model d_model=64 --model "
                         "gru_hidden=128; the fields are the method's config (H2INTConfig, ...)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seeds", default=None, metavar="S,S,...",
+                   help="train several seeds, each a run of its own under OUT/seedS, in parallel processes "
+                        "(--backend local) or as Ray tasks (--backend ray); equal to training them one by one")
+    p.add_argument("--backend", default="local", choices=("local", "ray"), help="with --seeds (default local)")
+    p.add_argument("--seed-workers", type=int, default=None, help="with --seeds --backend local: processes "
+                                                                  "(default one per seed, at most the cores)")
+    p.add_argument("--ray-address", default=None, help="with --seeds --backend ray: an existing cluster")
     p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
     p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")
     p.add_argument("--init", default=None, metavar="CHECKPOINT",
@@ -602,6 +629,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--out", default="benchmarks", help="folder for RESULTS.md and throughput.png")
     p.set_defaults(func=bench_cmd)
     args = parser.parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # the command as given (train --seeds repeats it)
     try:
         return args.func(args)
     except ValueError as e:  # bad input: one clear line

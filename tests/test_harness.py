@@ -257,3 +257,31 @@ def test_an_edited_outside_policy_is_re_evaluated_and_an_unchanged_one_reused(tm
     harness.run(s, [leaderboard.ENTRIES["orca"]], out)
     board = (tmp_path / "board" / "LEADERBOARD.md").read_text()
     assert "| orca |" in board and "mine_tmp" not in board  # the methods asked for
+
+
+@pytest.mark.slow
+def test_training_seeds_in_parallel_equals_training_them_one_by_one(tmp_path):
+    """``crowdbench train METHOD --seeds 0,1`` (worker processes) writes the same weights as the two commands."""
+    import torch
+
+    from crowdbench.cli import main
+
+    tiny = ["--il-episodes", "4", "--rl-episodes", "4", "--worlds", "2"]
+    assert main(["train", "cadrl", "--seeds", "0,1", "--out", str(tmp_path / "multi"), *tiny]) == 0
+    for s in (0, 1):
+        assert main(["train", "cadrl", "--seed", str(s), "--out", str(tmp_path / f"one{s}"), *tiny]) == 0
+        a = torch.load(tmp_path / "multi" / f"seed{s}" / "policy.pt", weights_only=True)["net"]
+        b = torch.load(tmp_path / f"one{s}" / "policy.pt", weights_only=True)["net"]
+        assert a.keys() == b.keys() and all(torch.equal(a[k], b[k]) for k in a)
+    a0 = torch.load(tmp_path / "multi" / "seed0" / "policy.pt", weights_only=True)["net"]
+    a1 = torch.load(tmp_path / "multi" / "seed1" / "policy.pt", weights_only=True)["net"]
+    assert any(not torch.equal(a0[k], a1[k]) for k in a0)  # different seeds, different runs
+
+
+def test_seed_commands_repeat_the_command_per_seed():
+    from crowdbench.training.seeds import seed_commands
+
+    cmds = seed_commands(["train", "h2int", "--seeds", "0,2", "--backend=local", "--out", "runs/x", "--minutes", "9"],
+                         [0, 2], "runs/x")
+    assert cmds == [["train", "h2int", "--minutes", "9", "--seed", "0", "--out", "runs/x/seed0"],
+                    ["train", "h2int", "--minutes", "9", "--seed", "2", "--out", "runs/x/seed2"]]
