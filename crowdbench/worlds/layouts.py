@@ -43,6 +43,9 @@ class Layout(ABC):
     """Whether goals must be as far apart as starts (False for layouts whose goals lie on a shared exit line)."""
     spacing: float = 0.8
     """Mean clearance between two pedestrians' centres at placement (set by :func:`place_without_overlap`) [m]."""
+    placement_gap: float = PLACEMENT_GAP
+    """Clearance beyond both radii between start positions (and goals) at placement [m] (:func:`place_without_overlap`;
+    dense layouts use less)."""
     robot: str = "fixed"
     """``fixed``: the robot crosses from :attr:`robot_start` to :attr:`robot_goal` every episode; ``random``: start
     and goal drawn per episode uniformly in ``[-robot_area, robot_area]²``, at least ``robot_min_distance`` apart
@@ -196,7 +199,8 @@ def place_without_overlap(
     Pedestrian ``i`` (radius ``human_radius[i]``, or one radius for all) takes the first of ``pool`` vectorised
     candidates whose start is clear of every accepted start, the robot's start and goal, and the obstacles, and whose
     goal is clear of every accepted goal and the robot's start and goal (clearance: both radii +
-    :data:`PLACEMENT_GAP`). After ``rounds`` pools without success it raises ``ValueError`` — at most
+    the layout's ``placement_gap``, :data:`PLACEMENT_GAP` by default). After ``rounds`` pools without success it
+    raises ``ValueError`` — at most
     ``n * pool * rounds`` candidates are ever drawn. Sets ``layout.spacing`` (the mean clearance between two
     pedestrians, for layouts that size their spawn areas by it).
     """
@@ -205,12 +209,13 @@ def place_without_overlap(
     radii = np.broadcast_to(np.asarray(human_radius, dtype=np.float64), (n,))
     robot_pts = (np.array([layout.robot_start, layout.robot_goal], dtype=np.float64) if robot_points is None
                  else np.ascontiguousarray(robot_points, dtype=np.float64))
+    gap = layout.placement_gap
     if n:
-        layout.spacing = 2 * float(radii.mean()) + PLACEMENT_GAP
+        layout.spacing = 2 * float(radii.mean()) + gap
     edges = obstacle_edges(obstacles)
     for i in range(n):
-        d_hr = np.full(2, radii[i] + robot_radius + PLACEMENT_GAP)
-        d_hh = radii[i] + radii[:i] + PLACEMENT_GAP
+        d_hr = np.full(2, radii[i] + robot_radius + gap)
+        d_hh = radii[i] + radii[:i] + gap
         for _ in range(rounds):
             s, g = layout.candidates(rng, i, n, pool)
             s, g = np.ascontiguousarray(s, dtype=np.float64), np.ascontiguousarray(g, dtype=np.float64)
@@ -222,7 +227,7 @@ def place_without_overlap(
             if len(edges):
                 for pts in (s, g):
                     clear = point_segment_distance(pts[:, None], edges[None, :, 0], edges[None, :, 1])
-                    ok &= (clear >= radii[i] + PLACEMENT_GAP).all(axis=1) & ~_inside_polygons(pts, obstacles)
+                    ok &= (clear >= radii[i] + gap).all(axis=1) & ~_inside_polygons(pts, obstacles)
             hits = np.flatnonzero(ok)
             if len(hits):
                 starts[i], goals[i] = s[hits[0]], g[hits[0]]
@@ -539,3 +544,70 @@ def _on_circle(radius: float, ang: np.ndarray, offset: np.ndarray) -> np.ndarray
     offset[:, 0] += radius * np.cos(ang)
     offset[:, 1] += radius * np.sin(ang)
     return offset
+
+
+@register("concourse")
+class Concourse(Layout):
+    """A station concourse for hundreds of people: a ``2·half_width`` m square hall (30 × 30 m by default) with a
+    wall on each side broken by a ``door`` m entrance at its middle, and eight 1.2 m square pillars on a ring at
+    ``half_width/2`` around the open centre. People start anywhere in the hall (placed without overlap) and walk to
+    a point of an entrance; on arrival they re-enter through an entrance chosen at random and head for another one,
+    so four streams cross the hall all episode. The robot crosses the hall between two uniform points at least
+    ``robot_min_distance`` apart, clear of walls and pillars. Large crowds: 500 people fit with the default radii
+    U(0.3, 0.5) m (placed 0.05 m apart); for 1,000 give smaller ones (``human_radius_range=(0.2, 0.3)``).
+    """
+
+    name = "concourse"
+    separate_goals = False
+    respawn = True
+    placement_gap = 0.05
+
+    def __init__(self, half_width: float = 15.0, door: float = 4.0, robot_min_distance: float = 15.0) -> None:
+        if not half_width > 4 or not 0 < door < half_width:
+            raise ValueError(f"half_width={half_width}, door={door}; valid choices: half_width > 4 m and "
+                             "0 < door < half_width [m]")
+        self.half_width, self.door = float(half_width), float(door)
+        self.half_size = half_width + 1.0
+        self.robot, self.robot_area = "random", half_width - 1.0
+        self.robot_min_distance = float(robot_min_distance)
+        w = self.half_width
+        self._doors = np.array([[0.0, -w], [w, 0.0], [0.0, w], [-w, 0.0]])  # door centres on the walls
+
+    def obstacles(self) -> tuple[Polygon, ...]:
+        w, d = self.half_width, self.door / 2
+        walls = (((-w, -w), (-d, -w)), ((d, -w), (w, -w)), ((w, -w), (w, -d)), ((w, d), (w, w)),
+                 ((w, w), (d, w)), ((-d, w), (-w, w)), ((-w, w), (-w, d)), ((-w, -d), (-w, -w)))
+        r, s = w / 2, 0.6
+        pillars = tuple(((cx - s, cy - s), (cx + s, cy - s), (cx + s, cy + s), (cx - s, cy + s))
+                        for cx in (-r, 0.0, r) for cy in (-r, 0.0, r) if (cx, cy) != (0.0, 0.0))
+        return walls + pillars
+
+    def _door_points(self, rng: np.random.Generator, which: np.ndarray) -> np.ndarray:
+        """A point of each chosen entrance ``which`` ``(m,)``, 0.8 m inside the hall, spread across the door [m]."""
+        c = self._doors[which]
+        inward = -c / self.half_width
+        across = np.stack([-inward[:, 1], inward[:, 0]], 1)
+        return c + 0.8 * inward + rng.uniform(-0.4, 0.4, (len(which), 1)) * self.door * across
+
+    def candidates(self, rng, index, n, m):
+        starts = rng.uniform(-self.half_width + 0.6, self.half_width - 0.6, (m, 2))
+        return starts, self._door_points(rng, rng.integers(0, 4, m))
+
+    def respawn_candidates(self, rng, m):
+        enter = rng.integers(0, 4, m)
+        leave = (enter + rng.integers(1, 4, m)) % 4  # another entrance
+        return self._door_points(rng, enter), self._door_points(rng, leave)
+
+    renew_uniforms = 0
+
+    def renew_goals(self, u, positions, goals):  # arrivals re-spawn (see respawn)
+        raise NotImplementedError("concourse re-spawns arriving pedestrians")
+
+    def robot_endpoints(self, rng, edges, radius):
+        polys = [p for p in self.obstacles() if len(p) >= 3]
+        for _ in range(64):
+            s, g = super().robot_endpoints(rng, edges, radius)
+            pts = np.stack([s, g])
+            if not _inside_polygons(pts, polys).any():
+                return s, g
+        raise ValueError("layout 'concourse': no robot crossing found clear of the pillars")

@@ -7,7 +7,6 @@ import pytest
 
 from crowdbench.config import WorldConfig
 from crowdbench.worlds import LAYOUTS, CrowdWorld, make_layout
-from crowdbench.worlds.layouts import PLACEMENT_GAP
 
 
 @pytest.mark.parametrize("name", LAYOUTS.names())
@@ -19,8 +18,9 @@ def test_thirty_pedestrians_placed_without_overlap(name, seed):
     starts, goals = lay.sample(rng, 30, 0.3, 0.3, robot_points=robot)
     for pts in (starts, goals) if lay.separate_goals else (starts,):
         d = np.linalg.norm(pts[:, None] - pts[None], axis=-1) + np.eye(30) * 99
-        assert d.min() >= 0.6 + PLACEMENT_GAP - 1e-12
-        assert np.linalg.norm(pts[:, None] - robot[None], axis=-1).min() >= 0.6 + PLACEMENT_GAP - 1e-12
+        gap = lay.placement_gap  # PLACEMENT_GAP but in dense layouts (the concourse)
+        assert d.min() >= 0.6 + gap - 1e-12
+        assert np.linalg.norm(pts[:, None] - robot[None], axis=-1).min() >= 0.6 + gap - 1e-12
 
 
 def test_circle_crossing_geometry():
@@ -172,3 +172,21 @@ def test_a_respawn_with_no_room_waits_at_the_goal():
     assert calls["n"] == 3 and w.spawns[0, 1] == 0
     w.step(np.zeros((1, 2)))
     assert w.spawns[0, 1] == 1 and np.linalg.norm(w.pos[0, 1] - w.pos[0, 2]) >= 0.6 + 0.25
+
+
+def test_the_concourse_holds_hundreds_with_streams_between_its_entrances():
+    import crowdbench
+
+    env = crowdbench.parallel_env(layout="concourse", num_humans=500)
+    env.reset(seed=0)
+    w = env.world
+    lay = w.layout
+    pos = w.pos[0, 1:]
+    d = np.linalg.norm(pos[:, None] - pos[None], axis=-1) - w.radius[0, 1:, None] - w.radius[0, None, 1:]
+    assert (d + np.eye(500) * 99).min() >= lay.placement_gap - 1e-12  # 500 placed without overlap
+    goals = w.goal[0, 1:]
+    near_door = np.linalg.norm(goals[:, None] - lay._doors[None], axis=-1).min(axis=1)
+    assert (near_door < lay.door / 2 + 1.0).all()  # every goal is an entrance
+    for _ in range(50):
+        env.step({"robot": np.zeros(2)})
+    assert np.isfinite(w.pos).all() and len(env.agents) == 501
