@@ -276,9 +276,10 @@ class CrowdParallelEnv(ParallelEnv):
         crowd = w.human_model.info()
         for agent, info in zip(self.agents[1 if self._robot_agent else 0:], self._human_infos(crowd), strict=False):
             infos[agent] = info
-        for i, agent in enumerate(self.agents[1 if self._robot_agent else 0:]):
+        for agent in self.agents[1 if self._robot_agent else 0:]:
             if agent in self._done:
                 continue
+            i = self._slot[agent]  # the pedestrian's slot (agents may have left the list before it)
             rewards[agent] = float(h_reward[0, i])
             infos[agent]["reward_terms"] = {k: float(v[0, i]) for k, v in h_terms.items()}
             terminations[agent] = bool(finished[i])

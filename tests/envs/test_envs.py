@@ -265,3 +265,25 @@ def test_supersuit_vectorises_the_flat_env_across_processes():
         obs, rew, term, trunc, _ = venv.step(np.stack([venv.action_space.sample() for _ in range(venv.num_envs)]))
     assert np.isfinite(obs).all() and rew.shape == (22,)
     venv.close()
+
+
+def test_finished_pedestrians_leave_and_the_others_keep_their_own_rewards():
+    """With pedestrians leaving one by one, every remaining agent's progress term is its own (slot, not list
+    position): the distance to its goal before the step minus after, from its own observations."""
+    env = crowdbench.parallel_env(num_humans=8, robot=None, pedestrians_finish=True, time_limit=60.0)
+    obs, _ = env.reset(seed=4)
+    gone: set[str] = set()
+    while env.agents:
+        before = {a: obs[a]["self"].astype(np.float64) for a in env.agents}
+        obs, rew, term, trunc, info = env.step({})
+        for a, me in before.items():
+            if term[a]:
+                gone.add(a)
+                assert not env.world.active[0, int(a.split("_")[1]) + 1]  # left the world
+                continue
+            if a in obs:
+                p_after = obs[a]["self"][0:2].astype(np.float64)
+                want = np.linalg.norm(me[4:6] - me[0:2]) - np.linalg.norm(me[4:6] - p_after)
+                assert info[a]["reward_terms"]["progress"] == pytest.approx(want, abs=1e-5)
+        assert not gone & set(env.agents)
+    assert len(gone) >= 4
