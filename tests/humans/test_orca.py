@@ -197,3 +197,39 @@ def test_neighbour_selection_is_rvo2s(m, k_max):
     want = sorted(zip(d.tolist(), idx.tolist(), strict=True))[:k_max]
     assert cnt == len(want)
     assert list(zip(nb_d[:cnt].tolist(), nb_idx[:cnt].tolist(), strict=True)) == want
+
+
+@pytest.mark.parametrize("n", [200, 1000])
+def test_grid_neighbour_search_is_bit_identical_to_brute_force(n):
+    """Above ``GRID_MIN`` agents ORCA finds neighbours on a grid of cells; over 20 steps of a jittered grid crowd
+    crossing its centre (nobody overlapping at the start), with obstacles, inactive agents and an ignored slot, the
+    velocities equal the brute-force search's bit for bit."""
+    from crowdbench.humans.orca_kernel import GRID_MIN, build_obstacles, orca_batch
+
+    assert n > GRID_MIN
+    rng = np.random.default_rng(n)
+    side = int(np.ceil(np.sqrt(n)))
+    xy = np.stack(np.meshgrid(np.arange(side), np.arange(side)), -1).reshape(-1, 2)[:n] * 1.2
+    pos = (xy - xy.mean(0) + rng.uniform(-0.2, 0.2, (n, 2)))[None].astype(np.float64)
+    goal = -pos
+    f = np.ones((1, n))
+    active = rng.random((1, n)) > 0.05
+    ignore = np.full((1, n), -1, np.int64)
+    ignore[0, ::7] = 3
+    obst = build_obstacles([[(-3.0, -3.0), (3.0, -3.0), (3.0, -2.0), (-3.0, -2.0)]])
+    args = (0.3 * f, 1.2 * f, 10.0 * f, np.full((1, n), 10, np.int64), 5.0 * f, 5.0 * f, active,
+            np.ones((1, n), bool), ignore)
+    a_pos, b_pos = pos.copy(), pos.copy()
+    a_vel, b_vel = np.zeros_like(pos), np.zeros_like(pos)
+    for _ in range(20):
+        a_out, b_out = np.empty_like(pos), np.empty_like(pos)
+        orca_batch(a_pos, a_vel, pref_velocity_batch(a_pos, goal), *args, *obst, 0.25, a_out)  # grid (default)
+        orca_batch(b_pos, b_vel, pref_velocity_batch(b_pos, goal), *args, *obst, 0.25, b_out, 10**9)  # brute
+        np.testing.assert_array_equal(a_out, b_out)
+        a_vel, b_vel = a_out, b_out
+        a_pos, b_pos = a_pos + a_vel * 0.25, b_pos + b_vel * 0.25
+
+
+def pref_velocity_batch(pos: np.ndarray, goal: np.ndarray) -> np.ndarray:
+    d = goal - pos
+    return d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1.0)
