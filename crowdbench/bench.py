@@ -192,14 +192,30 @@ def crowd_control_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> 
     return {k: _stats(v) for k, v in out.items()}
 
 
-def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int) -> dict[str, float]:
+def bench_crowd(n: int, worlds: int, crowd: str = "circle") -> np.ndarray:
+    """Start positions ``(worlds, n, 2)`` [m] of the ORCA scaling crowds (goal = −start, through the centre):
+    ``circle`` — a ring of radius max(4, 0.8·n/2π·1.3) m, ±0.3 m jitter (people overlap from n ≈ 100);
+    ``grid`` — a square lattice of 1.2 m pitch centred on the origin, ±0.2 m jitter: nobody overlaps at the start."""
+    rng = np.random.default_rng(0)
+    if crowd == "circle":
+        radius = max(4.0, n * 0.8 / (2 * np.pi) * 1.3)
+        ang = rng.uniform(0, 2 * np.pi, (worlds, n))
+        return radius * np.stack([np.cos(ang), np.sin(ang)], -1) + rng.uniform(-0.3, 0.3, (worlds, n, 2))
+    if crowd == "grid":
+        side = int(np.ceil(np.sqrt(n)))
+        xy = np.stack(np.meshgrid(np.arange(side), np.arange(side)), -1).reshape(-1, 2)[:n] * 1.2
+        return (xy - xy.mean(0))[None] + rng.uniform(-0.2, 0.2, (worlds, n, 2))
+    raise ValueError(f"crowd={crowd!r}; valid choices: circle, grid")
+
+
+def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int, crowd: str = "circle"
+                           ) -> dict[str, float]:
+    """ORCA agent-steps per second of the compiled kernel alone on :func:`bench_crowd` ``crowd`` (neighbour distance
+    10 m, 10 neighbours, radius 0.31 m, speed 1 m/s, dt 0.25 s)."""
     from crowdbench.humans import preferred_velocity
     from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
 
-    rng = np.random.default_rng(0)
-    radius = max(4.0, n * 0.8 / (2 * np.pi) * 1.3)
-    ang = rng.uniform(0, 2 * np.pi, (worlds, n))
-    pos = radius * np.stack([np.cos(ang), np.sin(ang)], -1) + rng.uniform(-0.3, 0.3, (worlds, n, 2))
+    pos = bench_crowd(n, worlds, crowd)
     goal, vel, f = -pos, np.zeros_like(pos), np.ones((worlds, n))
     args = (0.31 * f, f, 10.0 * f, np.full((worlds, n), 10, np.int64), 5.0 * f, 5.0 * f, np.ones((worlds, n), bool),
             np.ones((worlds, n), bool), np.full((worlds, n), -1, np.int64))
@@ -354,6 +370,9 @@ def run(quick: bool = False) -> dict[str, Any]:
         for n in (20, 50, 200):
             res["orca_agent_steps_per_s"][str(n)] = orca_agent_steps_per_s(n, 64, (3 if quick else 20)
                                                                            if n == 200 else (10 if quick else 60), rep)
+        res["orca_agent_steps_per_s_one_world"] = {
+            crowd: {str(n): orca_agent_steps_per_s(n, 1, 5 if quick else 20, rep, crowd) for n in (200, 1000)}
+            for crowd in ("circle", "grid")}
         res["crowd_control_steps_per_s"] = {
             "1": crowd_control_steps_per_s(20, 1, 100 if quick else 1000, rep),
             "64": crowd_control_steps_per_s(20, 64, 5 if quick else 100, rep)}
