@@ -233,3 +233,30 @@ def test_grid_neighbour_search_is_bit_identical_to_brute_force(n):
 def pref_velocity_batch(pos: np.ndarray, goal: np.ndarray) -> np.ndarray:
     d = goal - pos
     return d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1.0)
+
+
+@pytest.mark.parametrize("n", [200, 1000])
+def test_facade_agrees_with_python_rvo2_on_a_large_crowd(n):
+    """On a crowd in which nobody overlaps at the start (the jittered lattice of ``crowdbench.bench.bench_crowd``),
+    ``PyRVOSimulator`` (float64, grid neighbour search) and Python-RVO2 (float32, kd-tree) agree within 1e-3 m after
+    20 steps (when Python-RVO2 is installed: benchmarks/bench_peers.py says how to build it)."""
+    rvo2 = pytest.importorskip("rvo2")
+    from crowdbench.bench import bench_crowd
+
+    pos = bench_crowd(n, 1, "grid")[0]
+    goal = -pos
+    sims = [PyRVOSimulator(0.25, 10.0, 10, 5.0, 5.0, 0.31, 1.0), rvo2.PyRVOSimulator(0.25, 10.0, 10, 5.0, 5.0, 0.31,
+                                                                                      1.0)]
+    for sim in sims:
+        for p in pos:
+            sim.addAgent((float(p[0]), float(p[1])))
+        sim.processObstacles()
+    for _ in range(20):
+        for sim in sims:
+            here = np.array([sim.getAgentPosition(i) for i in range(n)])
+            pref = pref_velocity_batch(here, goal)
+            for i in range(n):
+                sim.setAgentPrefVelocity(i, (float(pref[i, 0]), float(pref[i, 1])))
+            sim.doStep()
+    a, b = (np.array([s.getAgentPosition(i) for i in range(n)]) for s in sims)
+    assert np.abs(a - b).max() < 1e-3
