@@ -436,10 +436,21 @@ def _grid_nearest(pos, active, b, i, skip, px, py, range_sq, k_max, cell_start, 
                         if dsq < range_sq:
                             cnt = _insert_nearest(nb_d, nb_idx, cnt, k_max, dsq, j)
                 gy += step if step > 0 else 1
-        # every cell of ring r + 1 lies at least r·c away (a whole ring of cells between)
-        lower = r * c
-        lower_sq = lower * lower
-        if lower_sq >= range_sq or (cnt == k_max and lower_sq > nb_d[cnt - 1]) or r > nx + ny:
+        # an unvisited agent lies outside the square of cells searched: at least as far as that square's nearest
+        # side that still has cells beyond it (none left: the search is complete)
+        lower = np.inf
+        if cx - r > 0:
+            lower = min(lower, px - (minx + (cx - r) * c))
+        if cx + r < nx - 1:
+            lower = min(lower, minx + (cx + r + 1) * c - px)
+        if cy - r > 0:
+            lower = min(lower, py - (miny + (cy - r) * c))
+        if cy + r < ny - 1:
+            lower = min(lower, miny + (cy + r + 1) * c - py)
+        if lower == np.inf:
+            return cnt
+        lower_sq = max(lower, 0.0) ** 2
+        if lower_sq >= range_sq or (cnt == k_max and lower_sq > nb_d[cnt - 1]):
             return cnt
         r += 1
 
