@@ -30,8 +30,8 @@ from crowdbench.worlds.world import PARK, CrowdWorld
 class CrowdMARLEnv:
     """See the module docstring. Args: ``num_worlds`` B, ``num_humans``, ``layout``, ``human_model`` (drives
     nobody the learner drives; kept for its world rules), ``robot`` (``"agent"``, None, or a robot policy name),
-    ``human_reward``, ``max_cycles`` (episode length in steps; default the ``time_limit``), ``seed`` (world b of
-    episode e runs seed ``seed + e·B + b``), ``device`` (a torch device, or None for numpy), and any
+    ``human_reward``, ``max_cycles`` (episode length in steps; default the ``time_limit``), ``seed`` (world b's
+    e-th episode runs seed ``seed + e·B + b``), ``device`` (a torch device, or None for numpy), and any
     :class:`~crowdbench.config.WorldConfig` field."""
 
     def __init__(self, num_worlds: int = 64, num_humans: int = 20, layout: str = "circle_crossing",
@@ -62,7 +62,7 @@ class CrowdMARLEnv:
         self.num_agents = self.world.num_agents - self._first
         n = self.config.max_humans_observed
         self.obs_dim = 9 + 6 * n
-        self.seed, self._episode = int(seed), 0
+        self.seed = int(seed)
         self.device = device
         A = self.world.num_agents
         self._me = np.empty((num_worlds, A, 9), np.float32)
@@ -89,10 +89,7 @@ class CrowdMARLEnv:
 
     def _reset_worlds(self, mask: np.ndarray) -> None:
         idx = np.flatnonzero(mask)
-        seeds = [self.seed + self._episode * self.num_worlds + int(b) for b in idx]
-        self._episode += 1 if mask.all() else 0
-        if not mask.all():  # a fresh seed per world episode, never reused
-            seeds = [int(s) for s in self._next_seed[idx]]
+        seeds = [int(s) for s in self._next_seed[idx]]  # world b's episodes: seed + b, seed + b + B, … never reused
         self._next_seed[idx] += self.num_worlds
         w = self.world
         w.reset(seeds=seeds, mask=mask)
@@ -108,7 +105,6 @@ class CrowdMARLEnv:
         """Start every world (world b on seed ``seed + b``, later episodes on fresh seeds); returns ``(B, A, D)``."""
         if seed is not None:
             self.seed = int(seed)
-        self._episode = 0
         self._next_seed = self.seed + np.arange(self.num_worlds)
         self._reset_worlds(np.ones(self.num_worlds, dtype=bool))
         return self._out(self._observe())

@@ -50,3 +50,15 @@ def test_robot_agent_and_torch_tensors():
         env.step(torch.zeros(3, 4, 2))
     with pytest.raises(ValueError, match=r"numbers in \[-1, 1\]"):
         env.step(torch.full((3, 5, 2), 2.0))
+
+
+def test_every_world_episode_gets_a_fresh_seed():
+    env = CrowdMARLEnv(num_worlds=3, num_humans=4, robot=None, max_cycles=5, device=None, seed=10)
+    used: list[int] = []
+    real = env.world.reset
+    env.world.reset = lambda seeds=None, mask=None: (used.extend(seeds), real(seeds=seeds, mask=mask))[1]
+    env.reset()
+    for _ in range(23):
+        env.step(np.zeros((3, 4, 2)))
+    assert len(used) == len(set(used)) > 3 and sorted(used)[:3] == [10, 11, 12]
+    assert all((s - 10) % 3 in (0, 1, 2) for s in used)
