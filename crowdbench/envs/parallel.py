@@ -48,7 +48,7 @@ from gymnasium import spaces
 from pettingzoo import ParallelEnv
 
 from crowdbench.envs.common import build_world, render_frame, robot_action_space, robot_info
-from crowdbench.humans.rewards import Before, contacts, make_reward
+from crowdbench.humans.rewards import Before, NoReward, contacts, make_reward
 from crowdbench.robots.observations import (
     agent_observations,
     check_tier,
@@ -144,7 +144,8 @@ class CrowdParallelEnv(ParallelEnv):
         self._renderer = None
         self._done: set[str] = set()
         self._slot = {f"human_{i}": i for i in range(H)}
-        self._live: set[str] = set(self.agents)
+        self._no_reward = np.zeros((1, H))
+        self._agents_changed()
         self._state_space = spaces.Box(-1e5, 1e5, (len(self.possible_agents) * 7,), np.float32)
         n = self.config.max_humans_observed
         self._flat_space = spaces.Box(-1e5, 1e5, (9 + 6 * n,), np.float32)
@@ -198,7 +199,7 @@ class CrowdParallelEnv(ParallelEnv):
         n = int(w.active[0, 1:].sum())
         humans = [f"human_{i}" for i in range(w.num_humans if self.flat else n)]
         self.agents = (["robot"] if self._robot_agent else []) + humans
-        self._live = set(self.agents)
+        self._agents_changed()
         if self._renderer is not None:
             self._renderer.clear()
         obs = self._observations()
@@ -254,11 +255,12 @@ class CrowdParallelEnv(ParallelEnv):
         w = self.world
         robot_action = self._robot_action(actions)
         human_actions, override = self._human_actions(actions)
-        before = Before.of(w)
+        scored = not isinstance(self.human_reward, NoReward)
+        before = Before.of(w) if scored or self.pedestrians_finish else None
         res = w.step(robot_action, human_actions, override)
         self._cycles += 1
-        arrived = w._reached.copy()
-        h_reward, h_terms = self.human_reward(w, before, arrived)
+        arrived = w._reached
+        h_reward, h_terms = self.human_reward(w, before, arrived) if scored else (self._no_reward, {})
         robot_done, trunc = res.done(0)
         if not self._robot_agent and self._robot_policy is None:  # no robot: its (parked) outcome means nothing
             robot_done, trunc = False, bool(w.steps[0] >= w.config.max_steps)
@@ -270,20 +272,25 @@ class CrowdParallelEnv(ParallelEnv):
                 w.active[0, 1:]
             w.retire(finished[None])
         episode_over = robot_done or trunc
-        rewards, terminations, truncations, infos = {}, {}, {}, {}
-        for agent in self.agents:
-            rewards[agent], terminations[agent], truncations[agent], infos[agent] = 0.0, False, False, {}
+        agents = self.agents
+        rewards, terminations = dict.fromkeys(agents, 0.0), dict.fromkeys(agents, False)
+        truncations = dict.fromkeys(agents, False)
+        if self._done:
+            humans = [a for a in agents if a != "robot" and a not in self._done]
+            slots = np.fromiter((self._slot[a] for a in humans), dtype=np.int64, count=len(humans))
+        else:
+            humans, slots = agents[1 if self._robot_agent else 0:], self._agent_slots
         crowd = w.human_model.info()
-        for agent, info in zip(self.agents[1 if self._robot_agent else 0:], self._human_infos(crowd), strict=False):
-            infos[agent] = info
-        for agent in self.agents[1 if self._robot_agent else 0:]:
-            if agent in self._done:
-                continue
-            i = self._slot[agent]  # the pedestrian's slot (agents may have left the list before it)
-            rewards[agent] = float(h_reward[0, i])
-            infos[agent]["reward_terms"] = {k: float(v[0, i]) for k, v in h_terms.items()}
-            terminations[agent] = bool(finished[i])
-            truncations[agent] = episode_over and not finished[i]
+        infos = self._human_infos(humans, slots, crowd, h_terms)
+        if len(humans):
+            fin = finished[slots]
+            rewards.update(zip(humans, h_reward[0, slots].tolist(), strict=True))
+            terminations.update(zip(humans, fin.tolist(), strict=True))
+            if episode_over:
+                truncations.update(zip(humans, (~fin).tolist(), strict=True))
+        if self._done:  # finished agents kept in the set (flat mode) get empty infos
+            for a in self._done:
+                infos.setdefault(a, {})
         if self._robot_agent:
             if "robot" not in self._done:
                 rewards["robot"] = res.reward.item(0)
@@ -305,8 +312,15 @@ class CrowdParallelEnv(ParallelEnv):
             self.agents = []
         elif newly_done:
             self.agents = [a for a in self.agents if a not in newly_done]
-        self._live = set(self.agents)
+        if self.agents is not agents:
+            self._agents_changed()
         return obs, rewards, terminations, truncations, infos
+
+    def _agents_changed(self) -> None:
+        """Caches of the live agent list: its set and its pedestrians' slots."""
+        self._live = set(self.agents)
+        humans = self.agents[1 if self._robot_agent else 0:]
+        self._agent_slots = np.fromiter((self._slot[a] for a in humans), dtype=np.int64, count=len(humans))
 
     def _observations(self) -> dict[str, Any]:
         """Every live agent's observation: views into one batched array per field."""
@@ -323,18 +337,29 @@ class CrowdParallelEnv(ParallelEnv):
             return {a: flat[rows[a]] if a not in self._done else np.zeros_like(flat[0]) for a in self.agents}
         robot, h = agent_observations(self._obs_builder, w)
         obs: dict[str, Any] = {"robot": {k: v[0] for k, v in robot.items()}} if self._robot_agent else {}
+        me, nb, mask, slot = h["self"], h["neighbors"], h["mask"], self._slot
         for agent in self.agents:
             if agent != "robot":
-                i = int(agent.split("_")[1])
-                obs[agent] = {"self": h["self"][i], "neighbors": h["neighbors"][i], "mask": h["mask"][i]}
+                i = slot[agent]
+                obs[agent] = {"self": me[i], "neighbors": nb[i], "mask": mask[i]}
         return obs
 
-    def _human_infos(self, crowd: dict[str, np.ndarray]) -> list[dict[str, Any]]:
-        """Per live pedestrian, in agent order: the model's analysis values (``crowd``: arrays ``(B, H)``)."""
-        humans = [int(a.split("_")[1]) for a in self.agents if a != "robot"]
-        if not crowd:
-            return [{} for _ in humans]
-        return [{k: v[0, i].item() for k, v in crowd.items()} for i in humans]
+    def _human_infos(self, humans: list[str], slots: np.ndarray, crowd: dict[str, np.ndarray],
+                     terms: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
+        """Per live pedestrian (slots ``slots``): the model's analysis values (``crowd``: arrays ``(B, H)``) and, with
+        a pedestrian reward, its named terms (``reward_terms``)."""
+        n = len(humans)
+        cnames, tnames = list(crowd), list(terms)
+        crows = np.stack([crowd[k][0, slots] for k in cnames], 1).tolist() if cnames else [()] * n
+        trows = np.stack([terms[k][0, slots] for k in tnames], 1).tolist() if tnames else None
+        if trows is None:
+            return {a: dict(zip(cnames, c, strict=True)) for a, c in zip(humans, crows, strict=True)}
+        infos: dict[str, dict[str, Any]] = {}
+        for agent, c, t in zip(humans, crows, trows, strict=True):
+            info = dict(zip(cnames, c, strict=True))
+            info["reward_terms"] = dict(zip(tnames, t, strict=True))
+            infos[agent] = info
+        return infos
 
     def state(self) -> np.ndarray:
         """Global state ``(A * 7,)``: per agent [px, py, vx, vy, gx, gy, r] (robot first; padding slots parked)."""

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba as nb
 import numpy as np
 
 from crowdbench.registry import Registry
@@ -82,18 +83,47 @@ class Progress(HumanReward):
         self.w_intrusion, self.personal, self.w_time = w_intrusion, personal, w_time
 
     def __call__(self, world, before, arrived):
-        p, act = world.pos[:, 1:], world.active[:, 1:]
-        moved_on = world.spawns[:, 1:] != before.spawns  # re-spawned: measure at the goal it reached
-        here = np.where((moved_on | arrived)[..., None], before.goals, p)
-        progress = np.linalg.norm(before.goals - before.positions, axis=-1) - np.linalg.norm(before.goals - here,
-                                                                                              axis=-1)
-        d, ped, robot = clearance(world)
-        terms = {"progress": self.w_progress * progress, "goal": self.w_goal * (arrived | moved_on),
-                 "collision": self.w_collision * (ped | robot),
-                 "intrusion": self.w_intrusion * np.clip(self.personal - d, 0.0, self.personal),
-                 "time": np.full(act.shape, self.w_time)}
-        terms = {k: np.where(act | moved_on | arrived, v, 0.0).astype(np.float64) for k, v in terms.items()}
-        return sum(terms.values()), terms
+        B, H = world.num_worlds, world.num_humans
+        terms = np.empty((5, B, H))
+        _progress_terms(before.positions, before.goals, before.spawns, world.pos, world.radius, world.active,
+                        world.spawns, arrived, bool(world.config.robot_visible),
+                        np.array([self.w_progress, self.w_goal, self.w_collision, self.w_intrusion, self.personal,
+                                  self.w_time]), terms)
+        return terms.sum(axis=0), dict(zip(self.terms, terms, strict=True))
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _progress_terms(p0, g0, spawns0, pos, radius, active, spawns, arrived, robot_visible, w,
+                    out):  # pragma: no cover - numba
+    """:class:`Progress`'s five terms ``out`` ``(5, B, H)`` in one pass (weights ``w`` = progress, goal, collision,
+    intrusion, personal distance, time); pedestrians neither active nor just arrived or re-spawned earn 0."""
+    B, A = radius.shape
+    for b in range(B):
+        for i in range(1, A):
+            h = i - 1
+            moved_on = spawns[b, i] != spawns0[b, h]
+            done = arrived[b, h] or moved_on
+            if not (active[b, i] or done):
+                for t in range(5):
+                    out[t, b, h] = 0.0
+                continue
+            gx, gy = g0[b, h, 0], g0[b, h, 1]
+            d0 = np.sqrt((gx - p0[b, h, 0]) ** 2 + (gy - p0[b, h, 1]) ** 2)
+            d1 = 0.0 if done else np.sqrt((gx - pos[b, i, 0]) ** 2 + (gy - pos[b, i, 1]) ** 2)
+            near, touch = np.inf, False
+            if active[b, i]:
+                for j in range(A):
+                    if j == i or not active[b, j] or (j == 0 and not robot_visible):
+                        continue
+                    d = np.sqrt((pos[b, j, 0] - pos[b, i, 0]) ** 2 + (pos[b, j, 1] - pos[b, i, 1]) ** 2) \
+                        - radius[b, i] - radius[b, j]
+                    near = min(near, d)
+                    touch = touch or d < 0.0
+            out[0, b, h] = w[0] * (d0 - d1)
+            out[1, b, h] = w[1] if done else 0.0
+            out[2, b, h] = w[2] if touch else 0.0
+            out[3, b, h] = w[3] * min(max(w[4] - near, 0.0), w[4])
+            out[4, b, h] = w[5]
 
 
 @register("none")
