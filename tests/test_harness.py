@@ -285,3 +285,31 @@ def test_seed_commands_repeat_the_command_per_seed():
                          [0, 2], "runs/x")
     assert cmds == [["train", "h2int", "--minutes", "9", "--seed", "0", "--out", "runs/x/seed0"],
                     ["train", "h2int", "--minutes", "9", "--seed", "2", "--out", "runs/x/seed2"]]
+
+
+def test_a_policy_reading_full_state_runs_in_its_own_section(tmp_path, monkeypatch):
+    """An outside policy that declares ``observation = "full_state"`` keeps working: it runs, its cells record
+    ``sensing=full``, and the board shows it in the privileged section, not ranked with the positions rows."""
+    import numpy as np
+
+    from crowdbench.policies import POLICIES
+    from crowdbench.policies.base import RobotPolicy
+
+    class Omniscient(RobotPolicy):
+        observation = "full_state"
+
+        def act(self, obs):
+            r = obs["robot"]
+            d = r[:, 3:5] - r[:, 0:2]
+            return d / np.maximum(np.linalg.norm(d, axis=1, keepdims=True), 1e-9)
+
+    monkeypatch.setattr(POLICIES, "_factories", dict(POLICIES._factories))
+    POLICIES.register("omniscient_tmp", Omniscient)
+    s = suite(rows=("II/N=10",), episodes=4, worlds=4)
+    entries = [leaderboard.ENTRIES["orca"], leaderboard.parse_entry("omni=omniscient_tmp")]
+    harness.run(s, entries, str(tmp_path))
+    cell = json.loads((tmp_path / "cells" / "omni" / "II-n-10.json").read_text())
+    assert cell["fingerprint"]["sensing"] == "full"
+    md = (tmp_path / "LEADERBOARD.md").read_text()
+    ranked, privileged = md.split("## Rows at `sensing=full`")
+    assert "| omni |" not in ranked and "| omni |" in privileged and "| orca |" in ranked
