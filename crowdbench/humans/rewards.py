@@ -83,26 +83,24 @@ class Progress(HumanReward):
         self.w_intrusion, self.personal, self.w_time = w_intrusion, personal, w_time
 
     def __call__(self, world, before, arrived):
-        B, H = world.num_worlds, world.num_humans
-        terms = np.empty((5, B, H))
-        _progress_terms(before.positions, before.goals, before.spawns, world.pos, world.radius, world.active,
-                        world.spawns, arrived, bool(world.config.robot_visible),
-                        np.array([self.w_progress, self.w_goal, self.w_collision, self.w_intrusion, self.personal,
-                                  self.w_time]), terms)
+        near, ped, robot = clearance(world)
+        terms = np.empty((5, world.num_worlds, world.num_humans))
+        _progress_terms(before.positions, before.goals, before.spawns, world.pos, world.active, world.spawns, arrived,
+                        near, ped | robot, np.array([self.w_progress, self.w_goal, self.w_collision, self.w_intrusion,
+                                                     self.personal, self.w_time]), terms)
         return terms.sum(axis=0), dict(zip(self.terms, terms, strict=True))
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _progress_terms(p0, g0, spawns0, pos, radius, active, spawns, arrived, robot_visible, w,
-                    out):  # pragma: no cover - numba
-    """:class:`Progress`'s five terms ``out`` ``(5, B, H)`` in one pass (weights ``w`` = progress, goal, collision,
-    intrusion, personal distance, time); pedestrians neither active nor just arrived or re-spawned earn 0."""
-    B, A = radius.shape
+def _progress_terms(p0, g0, spawns0, pos, active, spawns, arrived, near, touch, w, out):  # pragma: no cover - numba
+    """:class:`Progress`'s five terms ``out`` ``(5, B, H)`` from each pedestrian's nearest surface distance ``near``
+    and contact flag ``touch`` (:func:`clearance`), weights ``w`` = progress, goal, collision, intrusion, personal
+    distance, time; pedestrians neither active nor just arrived or re-spawned earn 0."""
+    B, A = active.shape
     for b in range(B):
         for i in range(1, A):
             h = i - 1
-            moved_on = spawns[b, i] != spawns0[b, h]
-            done = arrived[b, h] or moved_on
+            done = arrived[b, h] or spawns[b, i] != spawns0[b, h]
             if not (active[b, i] or done):
                 for t in range(5):
                     out[t, b, h] = 0.0
@@ -110,19 +108,10 @@ def _progress_terms(p0, g0, spawns0, pos, radius, active, spawns, arrived, robot
             gx, gy = g0[b, h, 0], g0[b, h, 1]
             d0 = np.sqrt((gx - p0[b, h, 0]) ** 2 + (gy - p0[b, h, 1]) ** 2)
             d1 = 0.0 if done else np.sqrt((gx - pos[b, i, 0]) ** 2 + (gy - pos[b, i, 1]) ** 2)
-            near, touch = np.inf, False
-            if active[b, i]:
-                for j in range(A):
-                    if j == i or not active[b, j] or (j == 0 and not robot_visible):
-                        continue
-                    d = np.sqrt((pos[b, j, 0] - pos[b, i, 0]) ** 2 + (pos[b, j, 1] - pos[b, i, 1]) ** 2) \
-                        - radius[b, i] - radius[b, j]
-                    near = min(near, d)
-                    touch = touch or d < 0.0
             out[0, b, h] = w[0] * (d0 - d1)
             out[1, b, h] = w[1] if done else 0.0
-            out[2, b, h] = w[2] if touch else 0.0
-            out[3, b, h] = w[3] * min(max(w[4] - near, 0.0), w[4])
+            out[2, b, h] = w[2] if touch[b, h] else 0.0
+            out[3, b, h] = w[3] * min(max(w[4] - near[b, h], 0.0), w[4])
             out[4, b, h] = w[5]
 
 
