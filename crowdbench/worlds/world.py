@@ -298,18 +298,27 @@ class CrowdWorld:
         self.human_model.reset(idx, self.model_rngs, self.crowd_state())
         self._apply_script()
 
+    def _attribute_draws(self, rng: np.random.Generator, k: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+        """``k`` pedestrians' radii [m] and preferred speeds [m/s] drawn from the config's ranges (radii first, then
+        speeds, capped at ``human_speed_cap``; None where the config gives fixed values): CrowdNav++'s randomised
+        attributes."""
+        cfg = self.config
+        r = rng.uniform(*cfg.human_radius_range, k) if cfg.human_radius_range is not None else None
+        v = rng.uniform(*cfg.human_v_pref_range, k) if cfg.human_v_pref_range is not None else None
+        if v is not None and cfg.human_speed_cap is not None:
+            v = np.minimum(v, cfg.human_speed_cap)
+        return r, v
+
     def _draw_attributes(self, b: int, rng: np.random.Generator, slots: slice | int) -> None:
         """Per-pedestrian radius and preferred speed of world ``b``'s agents ``slots`` (a slice, or one agent index;
-        drawn when the config gives ranges: CrowdNav++'s randomised attributes; pymunk's shapes follow)."""
-        cfg = self.config
+        :meth:`_attribute_draws`; pymunk's shapes follow)."""
         rows = slice(slots, slots + 1) if isinstance(slots, (int, np.integer)) else slots
-        k = len(self.radius[b, rows])
-        if cfg.human_radius_range is not None:
-            self.radius[b, rows] = rng.uniform(*cfg.human_radius_range, k)
+        r, v = self._attribute_draws(rng, len(self.radius[b, rows]))
+        if r is not None:
+            self.radius[b, rows] = r
             self.physics.set_radii(b, self.radius[b], slots)
-        if cfg.human_v_pref_range is not None:
-            v = rng.uniform(*cfg.human_v_pref_range, k)
-            self.v_pref[b, rows] = v if cfg.human_speed_cap is None else np.minimum(v, cfg.human_speed_cap)
+        if v is not None:
+            self.v_pref[b, rows] = v
 
     def set_agents(self, world: int, positions: np.ndarray | None = None, velocities: np.ndarray | None = None,
                    goals: np.ndarray | None = None) -> None:
@@ -450,13 +459,12 @@ class CrowdWorld:
         gone = was & ~active
         if not (moved.any() or gone.any() or (active & ~was).any()):
             return
-        pos, goal, vel = self.pos[:, 1:], self.goal[:, 1:], self.vel[:, 1:]
-        self.active[:, 1:] = active
-        pos[moved], goal[moved] = positions[moved], goals[moved]
+        self.active[:, 1:] |= active
+        self.retire(gone)  # leavers: inactive, parked, at rest
+        self.pos[:, 1:][moved], self.goal[:, 1:][moved] = positions[moved], goals[moved]
         self.v_pref[:, 1:][moved] = v_pref[moved]
-        pos[gone] = goal[gone] = self._park[:, 1:][gone]
-        vel[moved | gone] = 0.0
-        worlds = np.flatnonzero((moved | gone).any(axis=1))
+        self.vel[:, 1:][moved] = 0.0
+        worlds = np.flatnonzero(moved.any(axis=1))
         if len(worlds):
             self.physics.set_positions(worlds, self.pos[worlds])
 
@@ -476,17 +484,16 @@ class CrowdWorld:
         state (e.g. its responsiveness) carries over."""
         from crowdbench.worlds.layouts import PLACEMENT_GAP
 
-        lay, cfg = self.layout, self.config
+        lay = self.layout
         gap, m = lay.spawn_gap, lay.spawn_candidates
         for b in (bi[:1] if bi[0] == bi[-1] else np.unique(bi)):
             rng = self.rngs[b]
             for a in ai[bi == b]:
                 a = int(a)
-                r_new = rng.uniform(*cfg.human_radius_range) if cfg.human_radius_range is not None else None
-                v_new = rng.uniform(*cfg.human_v_pref_range) if cfg.human_v_pref_range is not None else None
+                r_new, v_new = self._attribute_draws(rng, 1)
                 s, g = lay.respawn_candidates(rng, m)
                 s = np.ascontiguousarray(s, dtype=np.float64)
-                r = self.radius[b, a] if r_new is None else r_new
+                r = self.radius[b, a] if r_new is None else r_new[0]
                 if gap is None:
                     self.radius[b, a] = r
                     k = first_clear(s, self.pos[b], self.radius[b], self.active[b], a, PLACEMENT_GAP)
@@ -498,7 +505,7 @@ class CrowdWorld:
                 if r_new is not None:
                     self.physics.set_radii(b, self.radius[b], a)
                 if v_new is not None:
-                    self.v_pref[b, a] = v_new if cfg.human_speed_cap is None else min(v_new, cfg.human_speed_cap)
+                    self.v_pref[b, a] = v_new[0]
                 self.pos[b, a], self.goal[b, a], self.vel[b, a] = s[k], g[k], 0.0
                 self.spawns[b, a] += 1
             self.physics.set_positions(np.array([b]), self.pos[b][None])
