@@ -24,6 +24,7 @@ Writes ``benchmarks/RESULTS.md`` and ``benchmarks/throughput.png`` (steps/s agai
 from __future__ import annotations
 
 import contextlib
+import inspect
 import json
 import os
 import platform
@@ -34,11 +35,16 @@ from typing import Any
 
 import numpy as np
 
+from crowdbench.policies import POLICIES, REFERENCE_METHOD, make_policy, trained_by
+from crowdbench.training.methods import PPO_METHODS
+
 TARGETS = {"pettingzoo_steps_per_s N=5 (resets excluded)": 32_000,
            "pettingzoo_steps_per_s N=10 (resets excluded)": 12_000,
            "pettingzoo_steps_per_s N=20 (resets excluded)": 4_000,
            "env_steps_per_s N=20 batch=64": 10_000, "orca_agent_steps_per_s N=20": 2_500_000,
-           "train_steps_per_s": 5_000, "h2int_inference_ms": 1.0}
+           "train_steps_per_s": 5_000, f"{REFERENCE_METHOD}_inference_ms": 1.0}
+INFERENCE = f"{REFERENCE_METHOD}_inference_ms"
+"""Key of the reference method's inference figure (:func:`h2int_inference_ms`)."""
 
 
 def cpu_model() -> str:
@@ -236,13 +242,12 @@ def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int, crowd:
 
 
 def train_steps_per_s(iterations: int, repeats: int, threads: int = 2, env_processes: int = 2,
-                      method: str = "h2int", variant: str | None = None) -> dict[str, float]:
+                      method: str = REFERENCE_METHOD, variant: str | None = None) -> dict[str, float]:
     """Env steps per second of ``crowdbench train METHOD``'s loop (rollout + PPO update, evaluations off), the
     method's recipe and ``variant`` (``None``: its default) apart from the speed settings given."""
     import tempfile
 
     from crowdbench.training.config import TrainConfig
-    from crowdbench.training.methods import PPO_METHODS
     from crowdbench.training.trainer import Trainer
 
     model = PPO_METHODS.get(method)().variant_model(variant)
@@ -262,20 +267,16 @@ def train_steps_per_s(iterations: int, repeats: int, threads: int = 2, env_proce
     return _stats(samples)
 
 
-def h2int_inference_ms(repeats: int, checkpoint: str | None = None) -> dict[str, float]:
+def h2int_inference_ms(repeats: int, checkpoint: str | None = None,
+                       method: str = REFERENCE_METHOD) -> dict[str, float]:
+    """One decision of the reference method's shipped (or ``checkpoint``) policy for one robot, 12 pedestrians in
+    view, one thread [ms]: the ``{REFERENCE_METHOD}_inference_ms`` figure."""
     import torch
 
-    from crowdbench import checkpoints
     from crowdbench.config import WorldConfig
-    from crowdbench.policies.h2int import H2INTConfig, H2INTPolicy
-    from crowdbench.policies.h2int.model import build_actor
 
     torch.set_num_threads(1)
-    path = checkpoints.resolve("h2int", checkpoint)
-    if os.path.exists(path):
-        policy = H2INTPolicy(WorldConfig(), checkpoint=path)
-    else:  # untrained network of the default architecture: same cost
-        policy = H2INTPolicy(WorldConfig(), actor=build_actor(H2INTConfig(), 30))
+    policy = make_policy(method, WorldConfig(), **({"checkpoint": checkpoint} if checkpoint else {}))
     rng = np.random.default_rng(0)
     k = 12  # pedestrians in view
     obs = {"robot": rng.normal(size=(1, 9)).astype(np.float32),
@@ -307,7 +308,6 @@ def decision_ms(policy_name: str, repeats: int, num_humans: int = 20, threads: i
     import torch
 
     from crowdbench.config import WorldConfig
-    from crowdbench.policies import make_policy
     from crowdbench.robots import make_observation
     from crowdbench.worlds import CrowdWorld
 
@@ -330,16 +330,14 @@ def decision_ms_all(repeats: int, threads: int = 1) -> dict[str, Any]:
     """:func:`decision_ms` of every registered robot policy with ``threads`` torch threads — a policy added to the
     registry (or through the ``crowdbench.policies`` entry point) gets its figure without touching this module.
     Policies that cannot be built with default arguments are reported with the reason."""
-    from crowdbench.policies import POLICIES
-
     out: dict[str, Any] = {}
     for name in POLICIES.names():
         try:
             out[name] = decision_ms(name, repeats, threads=threads)
         except Exception as e:  # noqa: BLE001 - reported, the other figures still run
             out[name] = {"skipped": f"{type(e).__name__}: {e}"}
-    for name in ("cadrl", "sarl"):  # look-ahead cost grows with the pedestrians sensed: also the worst case
-        if name in out and "skipped" not in out[name]:
+    for name in POLICIES.names():  # a look-ahead's cost grows with the pedestrians sensed: also the worst case
+        if "skipped" not in out[name] and "sensing_range" in inspect.signature(POLICIES.get(name)).parameters:
             out[f"{name}, all sensed"] = decision_ms(name, repeats, threads=threads, sensing_range=1e9)
     return out
 
@@ -376,7 +374,7 @@ def run(quick: bool = False) -> dict[str, Any]:
         res["crowd_control_steps_per_s"] = {
             "1": crowd_control_steps_per_s(20, 1, 100 if quick else 1000, rep),
             "64": crowd_control_steps_per_s(20, 64, 5 if quick else 100, rep)}
-        res["h2int_inference_ms"] = h2int_inference_ms(rep)
+        res[INFERENCE] = h2int_inference_ms(rep)
         res["decision_ms"] = decision_ms_all(rep)
     # a robot's computer gives its planner every core: the same decisions (bitwise for CADRL and SARL, tested),
     # the products split across threads
@@ -386,10 +384,13 @@ def run(quick: bool = False) -> dict[str, Any]:
     with one_core():
         res["train_steps_per_s_1_core"] = train_steps_per_s(2 if quick else 10, 1 if quick else 3, 1, 1)
     res["train_steps_per_s_by_method"] = {}
-    for method in ("dsrnn", "aig_gst"):  # the recurrent baselines' own recipes (192 worlds × 30 steps per iteration)
+    for method in trained_by("ppo"):  # the other PPO methods' own recipes (baselines: 192 worlds × 30 steps)
+        if method == REFERENCE_METHOD:
+            continue
         try:
+            variant = "original" if "original" in PPO_METHODS.get(method).variants else None
             res["train_steps_per_s_by_method"][method] = train_steps_per_s(1 if quick else 3, 1, method=method,
-                                                                               variant="original")
+                                                                               variant=variant)
         except Exception as e:  # noqa: BLE001 - reported (e.g. no shipped predictor yet), the rest still runs
             res["train_steps_per_s_by_method"][method] = {"skipped": f"{type(e).__name__}: {e}"}
     return res
@@ -420,8 +421,8 @@ def results_markdown(res: dict[str, Any]) -> str:
     for method, s in res.get("train_steps_per_s_by_method", {}).items():
         figure = f"{s['median']:,.0f} | {s['spread']:,.0f}" if "median" in s else f"skipped: {s['skipped']} |"
         lines.append(f"| train_steps_per_s ({method}, original widths, its recipe, 2 cores) | 10–30 | 192 | {figure} |")
-    s = res["h2int_inference_ms"]
-    lines.append(f"| h2int_inference_ms | 12 seen | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
+    s = res[INFERENCE]
+    lines.append(f"| {INFERENCE} | 12 seen | 1 | {s['median']:.3f} | {s['spread']:.3f} |")
     by_cores = dict(res.get("decision_ms_all_cores", {}))
     threads = by_cores.pop("threads", None)
     for suffix, figures in (("", res.get("decision_ms", {})), (f", {threads} threads", by_cores)):

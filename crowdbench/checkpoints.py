@@ -3,7 +3,7 @@
 A checkpoint is a plain dict of tensors and built-in types, written atomically with ``torch.save`` and read with
 ``torch.load(weights_only=True)`` — a file from someone else cannot run code when loaded::
 
-    {"format": "crowdbench.checkpoint/2", "method": "h2int", "crowdbench_version": "0.2.0",
+    {"format": "crowdbench.checkpoint/2", "method": "<name>", "crowdbench_version": "0.2.0",
      "model": {...architecture config...}, "n_max": 30, "actor": state_dict, ...}
 
 Training checkpoints add the critic, optimiser, environment and RNG state needed to resume exactly
@@ -17,21 +17,24 @@ import os
 from pathlib import Path
 from typing import Any
 
+from crowdbench.registry import Registry
+
 FORMAT = "crowdbench.checkpoint/2"
 SHIPPED = Path(__file__).resolve().parent / "policies"
-"""Shipped checkpoints are package data: ``policies/<method>/checkpoints/<name>.pt``, or the folder
-:data:`FOLDERS` names for methods that share a sub-package."""
-FOLDERS = {"cadrl": SHIPPED / "value" / "checkpoints" / "cadrl", "sarl": SHIPPED / "value" / "checkpoints" / "sarl",
-           "aig_gst": SHIPPED / "aig" / "checkpoints", "gst": SHIPPED.parent / "predictors" / "checkpoints"}
+"""Shipped checkpoints are package data; by default ``policies/<method>/checkpoints/<name>.pt``."""
+FOLDERS: Registry[Path] = Registry("checkpoint folder", "crowdbench.checkpoint_folders")
+"""Where the shipped checkpoints of a name live when not in the default folder: every robot method's
+(:attr:`crowdbench.policies.Method.checkpoints`, derived from the method registry) and other owners' (the trajectory
+predictor's, registered by :mod:`crowdbench.predictors`)."""
 
 
 def folder_of(method: str) -> Path:
     """Where the shipped checkpoints of ``method`` live."""
-    return FOLDERS.get(method, SHIPPED / method / "checkpoints")
+    return FOLDERS.get(method) if method in FOLDERS.names() else SHIPPED / method / "checkpoints"
 
 
 def shipped(method: str, name: str) -> str:
-    """Path of the shipped checkpoint ``name`` (e.g. ``"h2int"``, ``"meanpool"``) of ``method``."""
+    """Path of the shipped checkpoint ``name`` (e.g. a method's default, named like it) of ``method``."""
     return os.fspath(folder_of(method) / f"{name}.pt")
 
 
@@ -71,8 +74,9 @@ def load(path: str | os.PathLike, method: str | None = None) -> dict[str, Any]:
 
     path = os.fspath(path)
     if not os.path.exists(path):
+        names = ", ".join(shipped_names(method)) if method else ""
         raise ValueError(f"checkpoint {path!r} not found; pass --checkpoint PATH or one of the shipped names "
-                         f"({', '.join(shipped_names(method or 'h2int')) or 'none'})")
+                         f"({names or 'none'})")
     try:
         ckpt = torch.load(path, map_location="cpu", weights_only=True)
     except pickle.UnpicklingError as e:

@@ -12,7 +12,7 @@ import numpy as np
 from crowdbench import checkpoints
 from crowdbench.humans import HUMAN_MODELS
 from crowdbench.io import write_text
-from crowdbench.policies import POLICIES, make_policy
+from crowdbench.policies import DEFAULT_POLICY, POLICIES, REFERENCE_METHOD, make_policy, method_of, methods, trained_by
 from crowdbench.worlds import LAYOUTS
 
 
@@ -29,7 +29,7 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--humans", type=int, default=20, help="number of pedestrians")
     p.add_argument("--human-model", default="responsive_orca", help=f"one of {HUMAN_MODELS.names()}")
     p.add_argument("--responsiveness", type=float, default=None, help="crowd mean ρ for responsive_orca")
-    p.add_argument("--policy", default=None, help=f"robot policy (default orca), one of {POLICIES.names()}")
+    p.add_argument("--policy", default=None, help=f"robot policy (default {DEFAULT_POLICY}), one of {POLICIES.names()}")
     p.add_argument("--seed", type=int, default=0)
 
 
@@ -39,7 +39,7 @@ def demo(args: argparse.Namespace) -> int:
     from crowdbench.envs import CrowdParallelEnv
     from crowdbench.render import save_gif
 
-    name = getattr(args, "policy_pos", None) or args.policy or "orca"
+    name = getattr(args, "policy_pos", None) or args.policy or DEFAULT_POLICY
     kwargs = {"layout": args.layout, "num_humans": args.humans, "human_model": args.human_model,
               "human_model_kwargs": _model_kwargs(args.human_model, args.responsiveness), "render_mode": "rgb_array"}
     args.policy, args.policy_pos = name, None
@@ -78,25 +78,33 @@ def _policy(args: argparse.Namespace, config=None):
     name = args.policy_pos or args.policy
     if args.policy_pos and args.policy not in (None, args.policy_pos):
         raise ValueError(f"policy given twice ({args.policy_pos!r} and --policy {args.policy!r}); give one")
-    factory = POLICIES.get(name or "orca")
+    name = name or DEFAULT_POLICY
+    factory = POLICIES.get(name)
     params = inspect.signature(factory).parameters
     if args.checkpoint and "checkpoint" not in params:
         raise ValueError(f"--checkpoint: policy {name!r} takes no checkpoint; checkpoint-backed policies: "
-                         + ", ".join(n for n in POLICIES.names() if n in CHECKPOINT_POLICIES))
+                         + ", ".join(checkpoint_policies()))
     kwargs = {"checkpoint": args.checkpoint} if args.checkpoint else {}
     sensing = getattr(args, "sensing", None)
     if sensing is not None and "sensing" in params:
         kwargs["sensing"] = sensing
-    policy = make_policy(name or "orca", config, **kwargs)
+    policy = make_policy(name, config, **kwargs)
     if sensing is not None and policy.sensing != sensing:
         raise ValueError(f"--sensing {sensing}: policy {name!r} senses at tier {policy.sensing!r} and has no "
                          "sensing option; valid choices: omit --sensing, or a policy with a sensing option "
-                         "(orca, social_force, cadrl, sarl)")
+                         f"({', '.join(sensing_policies())})")
     return policy
 
 
-CHECKPOINT_POLICIES = ("h2int", "cadrl", "sarl", "dsrnn", "aig_gst")
-"""Registered policies known to take ``checkpoint=`` (listed in errors; any policy with the argument accepts it)."""
+def checkpoint_policies() -> list[str]:
+    """Registered methods whose policy loads a checkpoint (listed in errors; any policy with a ``checkpoint``
+    argument accepts one)."""
+    return [m.name for m in methods() if m.takes_checkpoint]
+
+
+def sensing_policies() -> list[str]:
+    """Registered methods whose policy runs at several sensing tiers (``--sensing``)."""
+    return [m.name for m in methods() if len(m.sensing) > 1]
 
 
 def evaluate(args: argparse.Namespace) -> int:
@@ -130,12 +138,12 @@ NEW_RUN_ONLY = ("envs", "epochs", "mini_batches", "reward_scale", "learning_rate
 
 
 def train_cmd(args: argparse.Namespace) -> int:
-    """Train a PPO method (H²INT or an ablation) with rsl-rl; checkpoints, curve and logs go to ``--out``."""
-    from crowdbench.training.value import VALUE_METHODS
-
+    """Train a PPO method with rsl-rl (a value method: :func:`train_value_cmd`); checkpoints, curve and logs go to
+    ``--out``."""
     if args.seeds:
         return train_seeds_cmd(args)
-    if args.algo in VALUE_METHODS:
+    value_methods = trained_by("value")
+    if args.algo in value_methods:
         return train_value_cmd(args)
     from crowdbench.training.config import RESUMABLE, TrainConfig
     from crowdbench.training.methods import PPO_METHODS
@@ -143,10 +151,10 @@ def train_cmd(args: argparse.Namespace) -> int:
 
     if args.algo not in PPO_METHODS.names():
         raise ValueError(f"train: unknown method {args.algo!r}; valid choices: "
-                         f"{', '.join([*PPO_METHODS.names(), *VALUE_METHODS])}")
+                         f"{', '.join([*PPO_METHODS.names(), *value_methods])}")
     misplaced = [f"--{k.replace('_', '-')}" for k in VALUE_ONLY if getattr(args, k) is not None]
     if misplaced:
-        raise ValueError(f"{', '.join(misplaced)}: options of the value-based methods ({', '.join(VALUE_METHODS)}), "
+        raise ValueError(f"{', '.join(misplaced)}: options of the value-based methods ({', '.join(value_methods)}), "
                          f"not of {args.algo}")
     method = PPO_METHODS.get(args.algo)()
     speed = {name: getattr(args, name) for name in RESUMABLE if getattr(args, name) is not None}
@@ -258,11 +266,16 @@ def predictor_cmd(args: argparse.Namespace) -> int:
 
 def export_cmd(args: argparse.Namespace) -> int:
     """Export a checkpoint to TorchScript and ONNX (recurrent: hidden state in and out)."""
-    from crowdbench.policies.h2int.export import export_onnx, export_torchscript
+    import importlib
 
+    method = method_of(args.method)
+    if method.export is None:
+        names = ", ".join(m.name for m in methods() if m.export)
+        raise ValueError(f"export --method {method.name}: it has no exporter; valid choices: {names}")
+    exporter = importlib.import_module(method.export)
     os.makedirs(args.out, exist_ok=True)
-    ts = export_torchscript(args.checkpoint, os.path.join(args.out, "policy.pt"))
-    onnx = export_onnx(args.checkpoint, os.path.join(args.out, "policy.onnx"))
+    ts = exporter.export_torchscript(args.checkpoint, os.path.join(args.out, "policy.pt"))
+    onnx = exporter.export_onnx(args.checkpoint, os.path.join(args.out, "policy.onnx"))
     print(f"wrote {ts} and {onnx}")
     return 0
 
@@ -294,7 +307,7 @@ def panels_cmd(args: argparse.Namespace) -> int:
     """One episode per layout, trajectories drawn (the paper's Fig. 4)."""
     from crowdbench.panels import plot
 
-    name = args.policy_pos or args.policy or "h2int"
+    name = args.policy_pos or args.policy or REFERENCE_METHOD
     print(f"wrote {plot(name, args.out, args.humans, args.seed, args.responsiveness, args.checkpoint)}")
     return 0
 
@@ -365,12 +378,7 @@ def tables_cmd(args: argparse.Namespace) -> int:
     torch.set_num_threads(1)
     grid = leaderboard.cells(tuple(t.strip() for t in args.tables.split(",")))
     kwargs = {"checkpoint": args.checkpoint} if args.checkpoint else {}
-    label = args.policy
-    if args.policy == "h2int":
-        from crowdbench.policies.h2int.policy import load_actor
-
-        variant = load_actor(args.checkpoint)[1]["variant"]
-        label = "h2int" if variant == "h2int" else f"h2int-{variant}"
+    label = _entry_label(args.policy, args.checkpoint)
     results = leaderboard.evaluate_cells(args.policy, grid, args.episodes, args.seed, policy_kwargs=kwargs,
                                          label=label)
     meta = {"command": "crowdbench " + " ".join(sys.argv[1:]), "policy": args.policy, "checkpoint": args.checkpoint,
@@ -380,18 +388,35 @@ def tables_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def _entry_label(policy: str, checkpoint: str | None) -> str:
+    """The label of the leaderboard row that runs ``policy`` on ``checkpoint`` (a shipped name or path; ``None``: the
+    policy's default), else the policy's name."""
+    from crowdbench import leaderboard
+
+    method = method_of(policy) if policy in [m.name for m in methods()] else None
+    if method is None or not method.takes_checkpoint:
+        return policy
+    path = os.path.realpath(checkpoints.resolve(policy, checkpoint))
+    for e in leaderboard.method_entries():
+        ckpt = e.policy_kwargs().get("checkpoint")
+        if e.policy == policy and ckpt and os.path.realpath(checkpoints.resolve(policy, ckpt)) == path:
+            return e.label
+    return policy
+
+
 def _methods(spec: str | None, add: list[str]) -> list:
     """Leaderboard entries from ``--methods`` (shipped entry names, registered policy names or LABEL=POLICY[@CKPT],
     comma-separated; default: every shipped entry) and ``--add``."""
     from crowdbench import leaderboard
 
+    entries = leaderboard.board_entries()
     if not spec:
-        chosen = list(leaderboard.ENTRIES.values())
+        chosen = list(entries.values())
     else:
         chosen = []
         for item in (s.strip() for s in spec.split(",") if s.strip()):
-            if item in leaderboard.ENTRIES:
-                chosen.append(leaderboard.ENTRIES[item])
+            if item in entries:
+                chosen.append(entries[item])
             elif "=" in item:
                 chosen.append(leaderboard.parse_entry(item))
             elif item in leaderboard.STALE:
@@ -400,7 +425,7 @@ def _methods(spec: str | None, add: list[str]) -> list:
             elif item in POLICIES.names():
                 chosen.append(leaderboard.Entry(item, item))
             else:
-                raise ValueError(f"--methods: unknown {item!r}; valid choices: {', '.join(leaderboard.ENTRIES)}, "
+                raise ValueError(f"--methods: unknown {item!r}; valid choices: {', '.join(entries)}, "
                                  f"a registered policy ({', '.join(POLICIES.names())}) or LABEL=POLICY[@CHECKPOINT]")
     return chosen + [leaderboard.parse_entry(a) for a in add]
 
@@ -425,7 +450,7 @@ def leaderboard_list_cmd(args: argparse.Namespace) -> int:
     from crowdbench import harness, leaderboard
 
     print("leaderboard entries (crowdbench leaderboard run --methods NAME,...):")
-    for slug, e in leaderboard.ENTRIES.items():
+    for slug, e in leaderboard.board_entries().items():
         ckpt = e.policy_kwargs().get("checkpoint")
         where = f"  checkpoint {os.path.relpath(checkpoints.resolve(e.policy, ckpt))}" if ckpt else ""
         tier = f"sensing={leaderboard.entry_sensing(e)}"
@@ -471,19 +496,19 @@ def main(argv: list[str] | None = None) -> int:
                    help="also run each episode without the robot (same seed) to measure the delay it imposes on "
                         "pedestrians (doubles the crowd simulation)")
     p.add_argument("--checkpoint", default=None,
-                   help="checkpoint of a checkpoint-backed policy: a path or a shipped name (h2int: meanpool, ...)")
+                   help="checkpoint of a checkpoint-backed policy: a path or a shipped name (`leaderboard list`)")
     p.add_argument("--sensing", default=None, choices=("positions", "velocities", "full"),
                    help="sensing tier (default: the policy's own — positions for every board method, as on the "
-                        "board); policies that read pedestrian states (orca, social_force, cadrl, sarl) take any")
+                        f"board); policies that read pedestrian states ({', '.join(sensing_policies())}) take any")
     p.set_defaults(func=evaluate)
-    p = sub.add_parser("train", help="train a learned policy: H²INT (rsl-rl PPO), CADRL or SARL (value learning)")
-    p.add_argument("algo", metavar="METHOD", help="h2int (or another registered PPO method), cadrl or sarl")
-    p.add_argument("--variant", default=None, help="architecture: h2int: h2int (default), flat, meanpool or standard; "
-                        "dsrnn: small (default), original or small_nearest; aig_gst: small (default) "
-                        "or original")
+    p = sub.add_parser("train", help="train a learned method: rsl-rl PPO or value learning (its `trainer`)")
+    p.add_argument("algo", metavar="METHOD",
+                   help=f"a method crowdbench trains: {', '.join([*trained_by('ppo'), *trained_by('value')])}")
+    p.add_argument("--variant", default=None, help="a named architecture of the method (its PPO binding's variants; "
+                        "default: its default variant)")
     p.add_argument("--model", action="append", default=None, metavar="FIELD=VALUE",
                    help="architecture field over the variant's (repeatable), e.g. --model d_model=64 --model "
-                        "gru_hidden=128; the fields are the method's config (H2INTConfig, ...)")
+                        "gru_hidden=128; the fields are the method's architecture config")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--seeds", default=None, metavar="S,S,...",
                    help="train several seeds, each a run of its own under OUT/seedS, in parallel processes "
@@ -513,25 +538,27 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--reward-scale", type=float, default=None,
                    help="factor on the rewards PPO sees (default 0.1; 1 = the originals' unscaled rewards)")
     p.add_argument("--learning-rate", type=float, default=None,
-                   help="initial Adam learning rate (H²INT 3e-4, adapted; DS-RNN and AIG-GST 4e-5, fixed)")
+                   help="initial Adam learning rate (default: the method's recipe)")
     p.add_argument("--schedule", default=None, choices=("adaptive", "fixed"),
-                   help="learning-rate schedule: adaptive (rsl-rl's KL-target rule; H²INT's) or fixed (the "
-                        "originals' for DS-RNN and AIG-GST)")
+                   help="learning-rate schedule: adaptive (rsl-rl's KL-target rule) or fixed (default: the "
+                        "method's recipe)")
     p.add_argument("--anneal", action=argparse.BooleanOptionalAction, default=None,
-                   help="the responsiveness curriculum (ρ annealed from 0.8 to 0; H²INT's default) or, with "
-                        "--no-anneal, training at the final ρ = 0 from the start (DS-RNN's and AIG-GST's default, "
-                        "the originals' invisible robot)")
+                   help="the responsiveness curriculum (ρ annealed from 0.8 to 0; the reference method's default) "
+                        "or, with --no-anneal, training at the final ρ = 0 from the start (the CrowdNav++ "
+                        "baselines' default, the originals' invisible robot)")
     p.add_argument("--worlds", type=int, default=None,
-                   help="cadrl/sarl: episodes run at once (default 10; same episode and update counts)")
-    p.add_argument("--il-episodes", type=int, default=None, help="cadrl/sarl: ORCA demonstrations (default 3000)")
-    p.add_argument("--rl-episodes", type=int, default=None, help="cadrl/sarl: TD-learning episodes (default 10000)")
+                   help="value methods: episodes run at once (default 10; same episode and update counts)")
+    p.add_argument("--il-episodes", type=int, default=None, help="value methods: ORCA demonstrations (default 3000)")
+    p.add_argument("--rl-episodes", type=int, default=None, help="value methods: TD-learning episodes (default 10000)")
     p.add_argument("--sensing", default=None, choices=("positions", "velocities", "full"),
-                   help="cadrl/sarl: sensing tier trained at (default positions: velocities estimated from positions)")
+                   help="value methods: sensing tier trained at (default positions: velocities estimated from "
+                        "positions)")
     p.add_argument("--free-space", action=argparse.BooleanOptionalAction, default=None,
-                   help="cadrl/sarl: value states with nobody sensed analytically (default off: it made CADRL worse, "
-                        "README)")
+                   help="value methods: value states with nobody sensed analytically (default off: it made CADRL "
+                        "worse, README)")
     p.set_defaults(func=train_cmd)
-    p = sub.add_parser("predictor", help="trajectory predictor (AIG-GST): record crowd data, train, compare")
+    p = sub.add_parser("predictor", help="trajectory predictor (of the predicted observation): record crowd data, "
+                                         "train, compare")
     p.add_argument("action", choices=("record", "train", "compare"))
     p.add_argument("--out", default=None, help="record: the .npz to write; train: the run folder (gst.pt)")
     p.add_argument("--data", default=None, help="train/compare: scenes written by `predictor record`")
@@ -544,11 +571,13 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--json", default=None, help="compare: also write the errors to this JSON file")
     p.set_defaults(func=predictor_cmd)
     p = sub.add_parser("export", help="export a checkpoint to TorchScript and ONNX")
-    p.add_argument("--checkpoint", default=None, help="H²INT checkpoint (path or shipped name; default: h2int)")
+    p.add_argument("--method", default=REFERENCE_METHOD,
+                   help=f"the method whose checkpoint is exported (default {REFERENCE_METHOD})")
+    p.add_argument("--checkpoint", default=None, help="checkpoint (path or shipped name; default: the method's own)")
     p.add_argument("--out", default="export")
     p.set_defaults(func=export_cmd)
     p = sub.add_parser("tables", help="the paper's Table I/II/III cells for one policy")
-    p.add_argument("--policy", default="h2int", help=f"one of {POLICIES.names()}")
+    p.add_argument("--policy", default=REFERENCE_METHOD, help=f"one of {POLICIES.names()}")
     p.add_argument("--checkpoint", default=None)
     p.add_argument("--tables", default="I,II,III", help="comma-separated subset of I, II, III")
     p.add_argument("--episodes", type=int, default=500)

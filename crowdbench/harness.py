@@ -27,18 +27,24 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from crowdbench.bench import cpu_model
 from crowdbench.io import write_text
 from crowdbench.leaderboard import (
+    STALE,
     TABLES,
     Cell,
     Entry,
+    _fingerprint,
     cells,
+    evaluate_cells,
     leaderboard_markdown,
     markdown,
+    method_entries,
     plot_board,
     scenario_digest,
     training_budgets,
 )
+from crowdbench.policies import REFERENCE_METHOD
 from crowdbench.validate import check_fields
 
 SUITES_DIR = Path(__file__).resolve().parent / "suites"
@@ -163,7 +169,6 @@ def provenance() -> dict[str, Any]:
             versions[name] = metadata.version(name)
         except metadata.PackageNotFoundError:
             versions[name] = None
-    from crowdbench.bench import cpu_model
 
     return {"crowdbench": __version__, "commit": commit, "python": platform.python_version(), "cpu": cpu_model(),
             "packages": versions}
@@ -171,8 +176,6 @@ def provenance() -> dict[str, Any]:
 
 def fingerprint(entry: Entry, suite: Suite) -> dict[str, Any]:
     """What a stored cell must match to be reused."""
-    from crowdbench.leaderboard import _fingerprint
-
     fp = _fingerprint(entry, suite.episodes, suite.seed)
     return {**fp, "suite": suite.digest(), "worlds": suite.worlds, "counterfactual": suite.counterfactual}
 
@@ -187,9 +190,6 @@ def run_cell(entry: Entry, cell: Cell, suite: Suite) -> dict[str, Any]:
     """Evaluate one cell, isolating faults: ``{"result": row, "cpu": model}`` or ``{"error": "Type: message", ...}``.
     ``cpu`` names the machine's CPU: a learned policy's closed loop can differ in the last bits between instruction
     sets (``docs/leaderboard/index.md``), and with Ray the cells of one method may run on different machines."""
-    from crowdbench.bench import cpu_model
-    from crowdbench.leaderboard import evaluate_cells
-
     try:
         import torch
 
@@ -339,7 +339,6 @@ def run(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend:
         write_text(os.path.join(out, f"{e.slug}.md"), markdown(rows))
     everyone, groups, planners, every_fp = gather(out, suite, board, {e.label: e.group for e in entries},
                                                   {e.label: fps[e.label] for e in entries}, only=True)
-    from crowdbench.leaderboard import STALE
 
     write_text(os.path.join(out, "LEADERBOARD.md"),
                leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name,
@@ -361,8 +360,6 @@ def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], group
     METHODS`, each method's other training seeds after it, then the rest by label). Returns rows, groups, the
     planners (labels whose fingerprint has no checkpoint) and every label's fingerprint (``fingerprints`` for the
     run's entries, the stored one otherwise)."""
-    from crowdbench.leaderboard import METHODS
-
     rows, groups, fingerprints = {}, dict(groups), dict(fingerprints)
     for path in sorted(Path(out).glob("*.json")):
         try:
@@ -377,11 +374,11 @@ def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], group
             groups.setdefault(meta["label"], meta.get("group", "main"))
             fingerprints.setdefault(meta["label"], meta.get("fingerprint") or {})
     rows.update(board)
-    order = [m.label for m in METHODS]
+    order = [m.label for m in method_entries()]
 
     def key(label: str) -> tuple[int, int, str]:
         group = groups.get(label, "main")
-        base = (group.split(":", 1)[1] if ":" in group else "h2int") if group.startswith("seeds") else label
+        base = (group.split(":", 1)[1] if ":" in group else REFERENCE_METHOD) if group.startswith("seeds") else label
         return (order.index(base) if base in order else len(order), base != label, label)
 
     planners = frozenset(lb for lb in rows if not fingerprints.get(lb, {}).get("checkpoint_sha256"))

@@ -28,7 +28,7 @@ import numpy as np
 from crowdbench.evaluation import run_episodes, summarize
 from crowdbench.io import write_text
 from crowdbench.metrics import wilson
-from crowdbench.policies import make_policy
+from crowdbench.policies import REFERENCE_METHOD, make_policy, methods
 
 REGIMES = {"High": 0.7, "Medium": 0.5, "Low": 0.3}
 
@@ -180,7 +180,7 @@ def legend_label(label: str, n_seeds: int, trained: bool = True) -> str:
 
 
 def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[str, str] | None = None,
-               rows: str = "main", reference: str = "h2int", planners: frozenset[str] = frozenset()) -> None:
+               rows: str = "main", reference: str = REFERENCE_METHOD, planners: frozenset[str] = frozenset()) -> None:
     """Success against the response regime ρ (Table I, N = 20) and against crowd size N (Table II, ρ = 0), one line
     per method of group ``rows`` (``main``; or ``ablation``, headed by ``reference``: the paper's ablation figure).
     A method with several training seeds (entries of group ``seeds:<label>``) is drawn at the seeds' mean, with error
@@ -274,7 +274,7 @@ class Entry:
     kwargs: tuple[tuple[str, Any], ...] = ()
     group: str = "main"
     """``main`` (the methods compared in Tables I–III), ``seeds:LABEL`` (other training seeds of the main entry
-    ``LABEL``; plain ``seeds`` = of H²INT) or ``ablation`` (H²INT variants)."""
+    ``LABEL``; plain ``seeds`` = of the reference method) or ``ablation`` (its variants)."""
 
     @property
     def slug(self) -> str:
@@ -285,21 +285,17 @@ class Entry:
         return dict(self.kwargs)
 
 
-METHODS: tuple[Entry, ...] = (
-    Entry("orca", "orca"),
-    Entry("social_force", "social_force"),
-    Entry("orca-velocities", "orca", (("sensing", "velocities"),)),
-    Entry("h2int", "h2int", (("checkpoint", "h2int"),)),
-    Entry("cadrl", "cadrl", (("checkpoint", "cadrl"),)),
-    Entry("sarl", "sarl", (("checkpoint", "sarl"),)),
-    Entry("dsrnn", "dsrnn", (("checkpoint", "dsrnn"),)),
-    Entry("aig_gst", "aig_gst", (("checkpoint", "aig_gst"),)),
-    Entry("h2int-flat", "h2int", (("checkpoint", "flat"),), "ablation"),
-    Entry("h2int-meanpool", "h2int", (("checkpoint", "meanpool"),), "ablation"),
-    Entry("h2int-standard", "h2int", (("checkpoint", "standard"),), "ablation"),
-)
-"""The leaderboard's methods; a learned one appears once a checkpoint trained on the current crowd ships. Rows at
-another sensing tier than ``positions`` (the ``sensing`` argument) get their own section of the board."""
+def method_entries() -> tuple[Entry, ...]:
+    """Every registered method's leaderboard rows (:attr:`crowdbench.policies.Method.entries`), the main rows
+    first, each group in registration order."""
+    rows = [Entry(e.label, m.name, e.kwargs, e.group) for m in methods() for e in m.entries]
+    return tuple(sorted(rows, key=lambda e: e.group != "main"))  # stable
+
+
+METHODS: tuple[Entry, ...] = method_entries()
+"""The leaderboard's methods (those registered when this module is imported; :func:`method_entries` for a later
+registration); a learned one appears once a checkpoint trained on the current crowd ships. Rows at another sensing
+tier than ``positions`` (the ``sensing`` argument) get their own section of the board."""
 
 
 def trained_crowd(path: str) -> str | None:
@@ -354,7 +350,13 @@ def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
 
 
 ENTRIES: dict[str, Entry] = shipped_entries()
-"""The shipped leaderboard's rows."""
+"""The shipped leaderboard's rows (of the methods registered at import; :func:`board_entries` for the current)."""
+
+
+def board_entries() -> dict[str, Entry]:
+    """The shipped leaderboard's rows of every method registered now (plug-ins registered after this module was
+    imported included)."""
+    return shipped_entries(method_entries())
 
 
 def parse_entry(spec: str) -> Entry:
@@ -465,7 +467,7 @@ def _clear_best(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
 
 def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[str, str] | None = None,
                          episodes: int | None = None, seed: int | None = None,
-                         reference: str | None = "h2int", suite: str | None = None,
+                         reference: str | None = REFERENCE_METHOD, suite: str | None = None,
                          planners: frozenset[str] = frozenset(),
                          budgets: dict[str, dict[str, int]] | None = None,
                          sensing: dict[str, str] | None = None, missing: dict[str, str] | None = None) -> str:

@@ -14,19 +14,18 @@ from typing import Any
 
 from crowdbench.io import write_text
 from crowdbench.metrics import wilson
+from crowdbench.policies import methods
 
-PAPER: dict[str, dict[str, tuple[int, int, int]]] = {
-    "orca": {"I": (97, 91, 78), "II": (93, 69, 43), "III": (93, 89, 72)},
-    "social_force": {"I": (65, 46, 31), "II": (60, 27, 12), "III": (56, 35, 24)},
-    "cadrl": {"I": (84, 71, 65), "II": (85, 61, 35), "III": (77, 68, 61)},
-    "sarl": {"I": (88, 79, 73), "II": (93, 53, 45), "III": (85, 76, 70)},
-    "dsrnn": {"I": (91, 81, 72), "II": (89, 81, 45), "III": (76, 73, 55)},
-    "aig_gst": {"I": (92, 86, 82), "II": (95, 89, 70), "III": (91, 86, 83)},
-    "h2int": {"I": (99, 97, 94), "II": (98, 95, 88), "III": (99, 93, 91)},
-}
-"""Success rates r_s [%] of the paper's Tables I–III (``h2int.tex``): Table I — circle crossing, N = 20,
-ρ = 0.7 / 0.5 / 0.3; Table II — ρ = 0, N = 10 / 20 / 30; Table III — the three unseen layouts pooled, N = 30,
-ρ = 0.7 / 0.5 / 0.3."""
+
+def paper_rates() -> dict[str, dict[str, tuple[int, int, int]]]:
+    """Success rates r_s [%] of the paper's Tables I–III per method (:attr:`crowdbench.policies.Method.paper`, from
+    ``h2int.tex``): Table I — circle crossing, N = 20, ρ = 0.7 / 0.5 / 0.3; Table II — ρ = 0, N = 10 / 20 / 30;
+    Table III — the three unseen layouts pooled, N = 30, ρ = 0.7 / 0.5 / 0.3."""
+    return {m.name: dict(m.paper) for m in methods() if m.paper}
+
+
+PAPER: dict[str, dict[str, tuple[int, int, int]]] = paper_rates()
+"""The paper's success rates of the methods registered at import (:func:`paper_rates`)."""
 ROWS = {"I": ("High", "Medium", "Low"), "II": ("N=10", "N=20", "N=30"),
         "III": ("pooled High", "pooled Medium", "pooled Low")}
 """The board's row labels in the order of :data:`PAPER`'s triples."""
@@ -56,7 +55,7 @@ def _paper_method(fp: dict[str, Any]) -> str | None:
     """The paper row of a stored cell's fingerprint: its policy, when it is one of the paper's methods with its own
     (or one of its training seeds') checkpoint — ablations and outside checkpoints have none."""
     policy = fp.get("policy")
-    if policy not in PAPER:
+    if policy not in paper_rates():
         return None
     ckpt = (fp.get("kwargs") or {}).get("checkpoint")
     if ckpt is None:
@@ -79,7 +78,10 @@ def compare(out: str) -> list[dict[str, Any]]:
         method = _paper_method(fp)
         if method is None:
             continue
+        rates = paper_rates()[method]
         for table, labels in ROWS.items():
+            if table not in rates:
+                continue
             for i, label in enumerate(labels):
                 if table == "III":
                     regime = label.split()[1].lower()
@@ -93,7 +95,7 @@ def compare(out: str) -> list[dict[str, Any]]:
                 check = _rate(checks) if all(checks) else None
                 agree = None if check is None else not (ours[2] < check[1] or check[2] < ours[1])
                 rows.append({"entry": folder.name, "method": method, "sensing": fp.get("sensing", "?"),
-                             "table": table, "row": label, "paper": PAPER[method][table][i], "ours": ours,
+                             "table": table, "row": label, "paper": rates[table][i], "ours": ours,
                              "check": check, "agree": agree, "scenario": fp.get("scenario")})
     return rows
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable
 from importlib.metadata import entry_points
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
 T = TypeVar("T")
 
@@ -31,6 +31,22 @@ class Registry(Generic[T]):
         self.kind = kind
         self.group = group
         self._factories: dict[str, Callable[..., T] | str] = {}
+        self._derived: list[tuple[Registry, Callable[[Any], Callable[..., T] | str | None]]] = []
+
+    def derive(self, source: Registry, factory_of: Callable[[Any], Callable[..., T] | str | None]) -> None:
+        """Also resolve every name of registry ``source`` whose object gives a factory through ``factory_of``
+        (``None``: not one of these): a method descriptor registered once supplies its robot policy, its training
+        binding, ... to the registries of those (:mod:`crowdbench.policies.method`)."""
+        self._derived.append((source, factory_of))
+
+    def _derived_factories(self) -> dict[str, Callable[..., T] | str]:
+        out: dict[str, Callable[..., T] | str] = {}
+        for source, factory_of in self._derived:
+            for name in source.names():
+                factory = factory_of(source.get(name))
+                if factory is not None:
+                    out.setdefault(name, factory)
+        return out
 
     def register(self, name: str, factory: Callable[..., T] | str | None = None, *, overwrite: bool = False):
         """Register ``factory`` under ``name``; usable as ``register("x", F)`` or as a decorator ``@register("x")``.
@@ -59,10 +75,15 @@ class Registry(Generic[T]):
 
     def names(self) -> list[str]:
         """All registered names, including installed entry points (sorted)."""
-        return sorted(set(self._factories) | {ep.name for ep in entry_points(group=self.group)})
+        return sorted(set(self._factories) | {ep.name for ep in entry_points(group=self.group)}
+                      | set(self._derived_factories() if self._derived else ()))
 
     def get(self, name: str) -> Callable[..., T]:
         """Return the factory for ``name``; raise ``ValueError`` naming the valid choices if unknown."""
+        if name not in self._factories and self._derived:
+            derived = self._derived_factories().get(name)
+            if derived is not None:
+                self._factories[name] = derived
         if name not in self._factories and not self._load_entry_point(name):
             raise ValueError(f"unknown {self.kind} {name!r}; valid choices: {', '.join(self.names())}")
         factory = self._factories[name]

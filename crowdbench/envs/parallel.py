@@ -11,8 +11,8 @@ follows it; one left out of the actions dict is driven by the world's pedestrian
 driven from outside the model is not stepped at all). So ``env.step({"robot": a})`` runs the usual benchmark.
 
 **Robot** (``robot=``): ``"agent"`` (default) — an agent whose action is required; ``None`` — no robot (parked far
-away, invisible; pure crowd episodes); or a registered robot policy name (``"orca"``, …) — driven inside the env,
-not an agent.
+away, invisible; pure crowd episodes); or a registered robot policy name (:data:`crowdbench.policies.POLICIES`) —
+driven inside the env, not an agent.
 
 **Observations.** The robot's comes from the ``observation`` builder (:mod:`crowdbench.robots.observations`); each
 pedestrian observes itself ([px, py, vx, vy, gx, gy, r, v_pref, θ]) and its neighbours within

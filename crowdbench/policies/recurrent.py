@@ -1,12 +1,21 @@
-"""The robot policy of a trained recurrent PPO actor (H²INT, DS-RNN): deterministic (the Gaussian's mean), one
-recurrent state per world, under ``torch.inference_mode``. Imports torch: the learned methods' policy modules load it
-on first use."""
+"""The robot policy of a trained recurrent PPO actor (H²INT, DS-RNN, AIG-GST): deterministic (the Gaussian's mean),
+one recurrent state per world, under ``torch.inference_mode``. Imports torch (not rsl-rl, not
+:mod:`crowdbench.training`): the learned methods' policy modules load it on first use.
+
+* :func:`load_actor` — a method's plain-torch actor (:class:`~crowdbench.policies.nets.RecurrentTrunkActor`) from a
+  checkpoint;
+* :class:`RecurrentActorPolicy` — a live actor driving the robot;
+* :class:`TrainedRecurrentPolicy` — what the methods share: ``checkpoint=`` (path or shipped name) or ``actor=`` (a
+  live one, evaluation during training); a method sets :attr:`~TrainedRecurrentPolicy.method`,
+  :attr:`~TrainedRecurrentPolicy.model_config` and :attr:`~TrainedRecurrentPolicy.build_actor`.
+"""
 
 from __future__ import annotations
 
 import os
 from collections.abc import Callable
-from typing import Any
+from functools import partial
+from typing import Any, ClassVar
 
 import numpy as np
 import torch
@@ -14,7 +23,7 @@ import torch
 from crowdbench import checkpoints
 from crowdbench.config import WorldConfig
 from crowdbench.policies.base import RobotPolicy
-from crowdbench.training.models import RecurrentTrunkActor
+from crowdbench.policies.nets import RecurrentTrunkActor
 
 
 def stored_config(cls: type, ckpt: dict[str, Any]) -> Any:
@@ -37,7 +46,7 @@ def load_actor(method: str, checkpoint: str | os.PathLike | None, model_config: 
 
 
 class RecurrentActorPolicy(RobotPolicy):
-    """A :class:`~crowdbench.training.models.RecurrentTrunkActor` driving the robot: ``encode_samples`` → ``step``
+    """A :class:`~crowdbench.policies.nets.RecurrentTrunkActor` driving the robot: ``encode_samples`` → ``step``
     with each world's state → the head's mean action.
 
     Args:
@@ -70,5 +79,42 @@ class RecurrentActorPolicy(RobotPolicy):
         n = len(x[self.actor.obs_keys[0]])
         if self.hidden is None or self.hidden.shape[1] != n:
             self.hidden = torch.zeros(1, n, self.actor.state_size)
-        latent, self.hidden = self.actor.step(self.actor.encode_samples(x), self.hidden)
-        return self.actor.mlp(latent).numpy().astype(np.float64)
+        action, self.hidden = self.actor.act(x, self.hidden)
+        return action.numpy().astype(np.float64)
+
+
+class TrainedRecurrentPolicy(RecurrentActorPolicy):
+    """A recurrent PPO method's robot policy: a shipped or trained checkpoint, or a live actor.
+
+    Args:
+        config: World configuration (``max_humans_observed`` must equal the checkpoint's slot count).
+        checkpoint: Path or shipped name (default: the shipped checkpoint named like the method).
+        actor: Alternatively a live actor of :attr:`model_config`'s network (evaluation during training).
+    """
+
+    method: ClassVar[str]
+    """The method's registry name (what its checkpoints record)."""
+    model_config: ClassVar[type]
+    """The architecture dataclass stored in its checkpoints (``model``)."""
+    build_actor: ClassVar[Callable[[Any, int], RecurrentTrunkActor]]
+    """``build_actor(model, n_max)``: an untrained actor (a ``staticmethod``)."""
+
+    def __init__(self, config: WorldConfig | None = None, checkpoint: str | None = None,
+                 actor: RecurrentTrunkActor | None = None) -> None:
+        meta: dict[str, Any] = {}
+        if actor is None:
+            actor, meta = self.load_actor(checkpoint)
+        super().__init__(config, actor, actor.slots, meta)
+
+    @classmethod
+    def load_actor(cls, checkpoint: str | os.PathLike | None = None) -> tuple[RecurrentTrunkActor, dict[str, Any]]:
+        """The actor of a checkpoint (path or shipped name; ``None``: the method's shipped default) in eval mode, and
+        the checkpoint's metadata (:meth:`describe` added)."""
+        actor, cfg, meta = load_actor(cls.method, checkpoint, partial(stored_config, cls.model_config),
+                                      cls.build_actor)
+        return actor, {**meta, **cls.describe(cfg)}
+
+    @classmethod
+    def describe(cls, model: Any) -> dict[str, Any]:
+        """Metadata of architecture ``model`` worth keeping with a loaded checkpoint (default: none)."""
+        return {}

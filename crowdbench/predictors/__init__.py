@@ -8,8 +8,12 @@
 * :mod:`.observation` — the ``predicted`` robot observation (current and predicted relative positions).
 """
 
+from pathlib import Path
+
+from crowdbench import checkpoints
 from crowdbench.predictors.base import PREDICTORS, ConstantVelocity, GroundTruth, Predictor, Track, make_predictor
 
 PREDICTORS.register("gst", "crowdbench.predictors.gst:GSTPredictor")
+checkpoints.FOLDERS.register("gst", Path(__file__).resolve().parent / "checkpoints")  # the shipped gst.pt
 
 __all__ = ["PREDICTORS", "ConstantVelocity", "GroundTruth", "Predictor", "Track", "make_predictor"]

@@ -50,13 +50,13 @@ def record(cfg: RecordConfig, path: str | None = None) -> dict[str, np.ndarray]:
     ``(S, A, K, 2)`` [m], ``valid`` ``(S, A)`` (seen now and a usable future), ``world`` ``(S,)``; pedestrians seen now
     come first in each scene, ``A`` = the most seen at once. Written atomically to ``path`` (``.npz``) if given."""
     from crowdbench.config import make_config
-    from crowdbench.policies import make_policy
+    from crowdbench.policies.classic import ORCAPolicy
     from crowdbench.robots.observations import make_observation
     from crowdbench.worlds.world import CrowdWorld
 
     config = make_config(humans_range=cfg.humans_range)
     world = CrowdWorld(config, cfg.worlds, "circle_crossing", "responsive_orca")
-    robot = make_policy("orca", config)
+    robot = ORCAPolicy(config)  # the ORCA robot drives while the crowd is recorded
     obs_builder = make_observation(robot.observation, config)
     rng = np.random.default_rng(cfg.seed)
 

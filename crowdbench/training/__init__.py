@@ -1,12 +1,13 @@
 """Training learned robot policies on batched crowd worlds — generic, for any method.
 
 PPO (rsl-rl-lib 5.5.1, the version pinned in ``pyproject.toml``), for methods registered in
-:data:`~crowdbench.training.methods.PPO_METHODS` (H²INT today):
+:data:`~crowdbench.training.methods.PPO_METHODS` (every registered method with ``trainer="ppo"``):
 
 * :mod:`.config` — :class:`TrainConfig` (frozen; every field documented);
 * :mod:`.vecenv`, :mod:`.shards`, :mod:`.curriculum` — the rsl-rl ``VecEnv`` over worlds sharded into worker
   processes, the responsiveness annealing;
-* :mod:`.models` — the shared-trunk recurrent actor and critic a method subclasses;
+* :mod:`.models` — the rsl-rl adapter of a method's plain-torch actor (:mod:`crowdbench.policies.nets`) and the
+  critic on its trunk;
 * :mod:`.rollout` — the one rollout: the world processes act with a snapshot of the policy;
 * :mod:`.ppo` — the one update: rsl-rl's ``PPO.update`` run per thread (each override of rsl-rl and why: there);
 * :mod:`.threads`, :mod:`.malloc` — the update's thread pool, glibc heap settings;

@@ -6,6 +6,9 @@ import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
+from crowdbench.policies import REFERENCE_METHOD
+from crowdbench.training.methods import PPO_METHODS
+
 RESUMABLE = ("iterations", "minutes", "until_success", "threads", "env_processes")
 """Fields a resumed run may change (budget and speed settings; the others are the run's identity)."""
 
@@ -18,7 +21,7 @@ they shape exploration, not the network."""
 class TrainConfig:
     """A PPO training run (:class:`~crowdbench.training.trainer.Trainer`). Unknown keys are an error."""
 
-    method: str = "h2int"
+    method: str = REFERENCE_METHOD
     """Registered PPO method (:data:`~crowdbench.training.methods.PPO_METHODS`)."""
     model: Any = None
     """The method's architecture config (its ``model_config`` dataclass, or a dict of its fields over that
@@ -95,8 +98,6 @@ class TrainConfig:
     """Free-form notes stored with the run (not read by training)."""
 
     def __post_init__(self) -> None:
-        from crowdbench.training.methods import PPO_METHODS
-
         method = PPO_METHODS.get(self.method)  # unknown method: one error naming the valid ones
         model = self.model
         if model is None:
@@ -140,8 +141,6 @@ class TrainConfig:
         """A run of ``method`` with its own training recipe (:attr:`PPOMethod.train_defaults
         <crowdbench.training.methods.PPOMethod.train_defaults>`, e.g. DS-RNN's PPO settings) under ``overrides``;
         ``TrainConfig(method=...)`` alone keeps this class's defaults (H²INT's)."""
-        from crowdbench.training.methods import PPO_METHODS
-
         return cls(**{**PPO_METHODS.get(method).train_defaults, "method": method, **overrides})
 
     def to_dict(self) -> dict[str, Any]:

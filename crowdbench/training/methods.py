@@ -1,14 +1,13 @@
 """The contract between a learned method and the generic PPO training path, and the registry of such methods.
 
-A method (H²INT today; DS-RNN and AIG-GST next) says what its network is and how it is evaluated; everything else —
-the batched worlds, the rollout in the world processes, the per-thread PPO update, the curriculum, checkpoints and
-exact resume, progress and plots — is :mod:`crowdbench.training`'s. Register a method by name::
-
-    from crowdbench.training.methods import PPO_METHODS
-    PPO_METHODS.register("mine", "my_pkg.training:MyMethod")    # or the entry-point group crowdbench.ppo_methods
-
-after which ``crowdbench train mine`` trains it. Value-based methods (CADRL, SARL: imitation, then TD learning) do
-not use PPO; their training lives beside this one (:mod:`crowdbench.training.value`).
+A method (H²INT, DS-RNN, AIG-GST) says what its network is and how it is evaluated; everything else — the batched
+worlds, the rollout in the world processes, the per-thread PPO update, the curriculum, checkpoints and exact resume,
+progress and plots — is :mod:`crowdbench.training`'s. A method's descriptor names its binding
+(:class:`crowdbench.policies.Method` with ``trainer="ppo"``, ``training="my_pkg.training:MyMethod"``), after which
+``crowdbench train mine`` trains it; :data:`PPO_METHODS` resolves those bindings by name (and still takes a direct
+``PPO_METHODS.register(name, cls)`` or the entry-point group ``crowdbench.ppo_methods``). Value-based methods (CADRL,
+SARL: imitation, then TD learning) do not use PPO; their training lives beside this one
+(:mod:`crowdbench.training.value`).
 """
 
 from __future__ import annotations
@@ -17,6 +16,7 @@ import dataclasses
 from abc import ABC, abstractmethod
 from typing import Any, ClassVar
 
+from crowdbench.policies import METHODS
 from crowdbench.registry import Registry
 
 
@@ -26,7 +26,8 @@ class PPOMethod(ABC):
     Class attributes:
         name: Registry name (also the ``method`` field of its checkpoints).
         model_config: Frozen dataclass of the architecture (every field documented); stored in checkpoints.
-        actor_class: The rsl-rl actor, a :class:`~crowdbench.training.models.RecurrentTrunkActor`.
+        actor_class: The network, a plain-torch :class:`~crowdbench.policies.nets.RecurrentTrunkActor` subclass
+            (training wraps it for rsl-rl: :func:`~crowdbench.training.models.rsl_rl_actor`).
         observation: Robot observation the actor reads (``relative``, ``relative_by_id`` or ``full_state``); the
             training worlds and quick evaluations build it.
     """
@@ -118,6 +119,5 @@ class PPOMethod(ABC):
 
 
 PPO_METHODS: Registry[PPOMethod] = Registry("PPO method", "crowdbench.ppo_methods")
-PPO_METHODS.register("h2int", "crowdbench.policies.h2int.training:H2INTMethod")
-PPO_METHODS.register("dsrnn", "crowdbench.policies.dsrnn.training:DSRNNMethod")
-PPO_METHODS.register("aig_gst", "crowdbench.policies.aig.training:AIGMethod")
+"""The PPO bindings by method name: every registered method with ``trainer="ppo"`` (its ``training``)."""
+PPO_METHODS.derive(METHODS, lambda m: m.training if m.trainer == "ppo" else None)

@@ -11,7 +11,8 @@ for a measured reason:
   over the mini-batch and therefore sums of per-share sums over its size. Equal to ``PPO.update`` to float rounding
   for 1 and 2 threads (tested); with 1 thread it is the same code, inline.
 * :meth:`SharedTrunkPPO.construct_algorithm` — builds the critic on the actor's trunk
-  (:class:`~crowdbench.training.models.SharedTrunkCritic`) and uses ``torch.optim.Adam(fused=True)`` (one kernel per
+  (:class:`~crowdbench.training.models.SharedTrunkCritic`; the actor is the rsl-rl adapter of the method's plain
+  network, :func:`~crowdbench.training.models.rsl_rl_actor`) and uses ``torch.optim.Adam(fused=True)`` (one kernel per
   step: 0.25 against 1.15 ms here; same parameters, same order, same ``state_dict`` layout as rsl-rl's optimiser).
 
 Covers what crowdbench trains — a recurrent shared-trunk actor/critic, a Gaussian policy with state-independent std,
@@ -30,7 +31,8 @@ from rsl_rl.algorithms import PPO
 from rsl_rl.modules.distribution import GaussianDistribution
 from torch.distributions import Normal
 
-from crowdbench.training.models import RecurrentTrunkActor, SharedTrunkCritic
+from crowdbench.policies.nets import RecurrentTrunkActor
+from crowdbench.training.models import SharedTrunkCritic, is_rsl_rl_actor, rsl_rl_actor
 from crowdbench.training.threads import pool, trajectory_shares
 
 
@@ -121,8 +123,10 @@ class SharedTrunkPPO(PPO):
         for key in ("use_mixed_precision", "normalize_advantage_per_mini_batch"):
             if alg_cfg.get(key):
                 raise ValueError(f"SharedTrunkPPO: {key}=True is not supported; valid choices: False")
-        if not issubclass(actor_class, RecurrentTrunkActor):
-            raise ValueError(f"SharedTrunkPPO: actor {actor_class.__name__}; valid choices: a RecurrentTrunkActor")
+        if not (isinstance(actor_class, type) and issubclass(actor_class, RecurrentTrunkActor)):
+            raise ValueError(f"SharedTrunkPPO: actor {actor_class!r}; valid choices: a RecurrentTrunkActor")
+        if not is_rsl_rl_actor(actor_class):  # a plain network class: its rsl-rl adapter
+            actor_class = rsl_rl_actor(actor_class)
         actor = actor_class(obs, cfg["obs_groups"], "actor", env.num_actions, **actor_cfg).to(device)
         check_gaussian(actor.distribution)
         critic = SharedTrunkCritic(obs, cfg["obs_groups"], "critic", 1, actor=actor, **critic_cfg).to(device)

@@ -27,16 +27,18 @@ from rsl_rl.storage import RolloutStorage
 from tensordict import TensorDict
 from torch.distributions import Normal
 
-from crowdbench.training.models import RecurrentTrunkActor, SharedTrunkCritic
+from crowdbench.policies.nets import RecurrentTrunkActor
+from crowdbench.training.models import SharedTrunkCritic, rsl_rl_actor
 from crowdbench.training.ppo import gaussian_std
 
 
 def build_models(actor_class: type[RecurrentTrunkActor], actor_cfg: dict[str, Any], critic_cfg: dict[str, Any],
                  shapes: dict[str, tuple[int, ...]], num_actions: int) -> tuple[RecurrentTrunkActor, SharedTrunkCritic]:
-    """A fresh actor and critic (observation groups of per-sample ``shapes``); picklable through ``partial``."""
+    """A fresh actor (the rsl-rl adapter of the plain network class ``actor_class``) and critic (observation groups
+    of per-sample ``shapes``); picklable through ``partial``."""
     obs = TensorDict({k: torch.zeros(1, *s) for k, s in shapes.items()}, batch_size=[1])
     groups = {"actor": list(actor_class.obs_keys), "critic": list(actor_class.obs_keys)}
-    actor = actor_class(obs, groups, "actor", num_actions, **actor_cfg)
+    actor = rsl_rl_actor(actor_class)(obs, groups, "actor", num_actions, **actor_cfg)
     return actor, SharedTrunkCritic(obs, groups, "critic", 1, actor=actor, **critic_cfg)
 
 
@@ -99,8 +101,9 @@ def snapshot_builder(alg: Any, cfg: dict[str, Any], obs: TensorDict, num_actions
     """The picklable network builder of a trainer's rsl-rl config (``cfg["actor"]``, ``cfg["critic"]``)."""
     actor_cfg = {k: v for k, v in cfg["actor"].items() if k != "class_name"}
     critic_cfg = {k: v for k, v in cfg["critic"].items() if k != "class_name"}
-    shapes = {k: tuple(obs[k].shape[1:]) for k in type(alg.actor).obs_keys}
-    return partial(build_models, type(alg.actor), actor_cfg, critic_cfg, shapes, num_actions)
+    net_class = type(alg.actor).net_class  # the plain network class: the adapter class is not picklable
+    shapes = {k: tuple(obs[k].shape[1:]) for k in net_class.obs_keys}
+    return partial(build_models, net_class, actor_cfg, critic_cfg, shapes, num_actions)
 
 
 def store_step(alg: Any, parts: list[dict[str, Any]]) -> float:

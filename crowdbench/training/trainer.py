@@ -30,7 +30,7 @@ from crowdbench.training.config import NOISE_FIELDS, RESUMABLE, TrainConfig
 from crowdbench.training.curriculum import Curriculum
 from crowdbench.training.malloc import keep_heap
 from crowdbench.training.methods import PPO_METHODS, PPOMethod
-from crowdbench.training.models import SharedTrunkCritic
+from crowdbench.training.models import SharedTrunkCritic, rsl_rl_actor
 from crowdbench.training.plots import plot_curve
 from crowdbench.training.ppo import SharedTrunkPPO, gaussian_std
 from crowdbench.training.rollout import PolicySnapshot, collect, snapshot_builder
@@ -49,7 +49,7 @@ def rsl_cfg(cfg: TrainConfig, method: PPOMethod) -> dict[str, Any]:
                       "entropy_coef": cfg.entropy_coef, "schedule": cfg.schedule, "desired_kl": cfg.desired_kl,
                       "gamma": cfg.gamma, "lam": cfg.lam, "max_grad_norm": cfg.max_grad_norm,
                       "value_loss_coef": cfg.value_loss_coef, "clip_param": cfg.clip},
-        "actor": {"class_name": method.actor_class, **method.actor_cfg(cfg.model)},
+        "actor": {"class_name": rsl_rl_actor(method.actor_class), **method.actor_cfg(cfg.model)},
         "critic": {"class_name": SharedTrunkCritic, **method.critic_cfg(cfg.model)},
     }
 

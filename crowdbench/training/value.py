@@ -33,6 +33,14 @@ from typing import Any
 
 import numpy as np
 
+from crowdbench.policies import POLICIES, trained_by
+from crowdbench.policies.value import DEFAULT_VALUE_METHOD
+
+
+def value_methods() -> list[str]:
+    """The registered methods this module trains (``trainer="value"``)."""
+    return trained_by("value")
+
 
 def discounted_returns(rewards: np.ndarray, gamma: np.ndarray | float) -> np.ndarray:
     """Return-to-go of one episode: ``G_t = r_t + γ_t G_{t+1}`` for rewards ``(T,)`` and per-step discount
@@ -98,7 +106,6 @@ class ReplayMemory:
             self.data[k][:self.size] = v.numpy()
 
 
-VALUE_METHODS = ("cadrl", "sarl")
 CLOCK = ("episodes", "targets", "sgd", "evaluation", "checkpoints")
 """Where a run's wall-clock time goes (seconds per activity, kept in ``history.json``)."""
 PHASES = ("il", "il_fit", "rl", "done")
@@ -110,8 +117,8 @@ RESUMABLE = ("minutes", "threads")
 class ValueTrainConfig:
     """A CADRL or SARL training run (defaults: CrowdNav's ``train.config``). Unknown keys are an error."""
 
-    method: str = "sarl"
-    """``cadrl`` or ``sarl``."""
+    method: str = DEFAULT_VALUE_METHOD
+    """A registered method with ``trainer="value"`` (:func:`value_methods`: CADRL or SARL)."""
     model: dict[str, Any] = dataclasses.field(default_factory=dict)
     """Architecture overrides (fields of :class:`~crowdbench.policies.value.model.CADRLConfig` / ``SARLConfig``)."""
     seed: int = 0
@@ -181,8 +188,8 @@ class ValueTrainConfig:
 
         check_sensing(self.sensing)
 
-        if self.method not in VALUE_METHODS:
-            raise ValueError(f"method={self.method!r}; valid choices: {', '.join(VALUE_METHODS)}")
+        if self.method not in value_methods():
+            raise ValueError(f"method={self.method!r}; valid choices: {', '.join(value_methods())}")
         build_net(self.method, self.model)  # unknown architecture keys: one clear error
         object.__setattr__(self, "model", {k: list(v) for k, v in self.model.items()})
         object.__setattr__(self, "humans_range", tuple(int(n) for n in self.humans_range))
@@ -249,7 +256,6 @@ class ValueTrainer:
         from crowdbench.config import make_config
         from crowdbench.policies.classic import ORCAPolicy
         from crowdbench.policies.value.model import build_net
-        from crowdbench.policies.value.policy import CADRLPolicy, SARLPolicy
         from crowdbench.robots.observations import make_observation
         from crowdbench.worlds.world import CrowdWorld
 
@@ -260,8 +266,7 @@ class ValueTrainer:
         self.net = build_net(cfg.method, cfg.model)
         self.target = copy.deepcopy(self.net)
         self.config = make_config(humans_range=cfg.humans_range)
-        policy_cls = CADRLPolicy if cfg.method == "cadrl" else SARLPolicy
-        self.policy = policy_cls(self.config, net=self.net, gamma=cfg.gamma, free_space=cfg.free_space,
+        self.policy = POLICIES.get(cfg.method)(self.config, net=self.net, gamma=cfg.gamma, free_space=cfg.free_space,
                                  sensing=cfg.sensing)
         # CrowdNav's il_policy: ORCA, safety space 0.15 m, sensing what the learner senses
         self.demonstrator = ORCAPolicy(self.config, sensing=cfg.sensing)
@@ -593,7 +598,7 @@ def resume_config(path: str, **changes: Any) -> ValueTrainConfig:
     if bad:
         raise ValueError(f"--resume: {bad} cannot change; valid choices: {', '.join(RESUMABLE)}")
     ckpt = checkpoints.load(path)
-    if ckpt.get("method") not in VALUE_METHODS or "train_config" not in ckpt:
+    if ckpt.get("method") not in value_methods() or "train_config" not in ckpt:
         raise ValueError(f"--resume: {path!r} is not a CADRL/SARL training checkpoint")
     return dataclasses.replace(ValueTrainConfig.from_dict(ckpt["train_config"]), **changes)
 

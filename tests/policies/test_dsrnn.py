@@ -124,7 +124,7 @@ def test_done_worlds_restart_from_zero_state():
         torch.testing.assert_close(core(x)[0, 1], fresh(x)[0, 1])
 
 
-def test_actor_through_rsl_rl_interface():
+def test_actor_steps_its_own_recurrent_state():
     actor = build_actor(DSRNNConfig(), K)
     g = torch.Generator().manual_seed(4)
     x = _obs(8, g)
@@ -133,7 +133,7 @@ def test_actor_through_rsl_rl_interface():
     with torch.no_grad():
         a = actor(obs)
     assert a.shape == (8, 2) and torch.isfinite(a).all()
-    assert actor.get_hidden_state().shape == (1, 8, actor.rnn.state_dim)
+    assert actor.rnn.hidden_state.shape == (1, 8, actor.rnn.state_dim)
     assert actor.rnn.state_dim == 256 + K * 256 + 128
 
 

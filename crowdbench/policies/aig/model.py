@@ -16,7 +16,7 @@ predicted positions relative to the robot — :mod:`crowdbench.predictors.observ
   the latent of the actor and critic heads (256→256→256, tanh), as DS-RNN.
 
 The encoder (everything before the GRU) is :meth:`AIGActor.encode_samples`, so the generic trunk
-(:class:`~crowdbench.training.models.RecurrentTrunkActor`) trains it; only the GRU's output layer is added
+(:class:`~crowdbench.policies.nets.RecurrentTrunkActor`) trains it; only the GRU's output layer is added
 (:class:`GRUWithOutput`).
 """
 
@@ -28,11 +28,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import torch
-from rsl_rl.modules import RNN
-from tensordict import TensorDict
 from torch import nn
 
-from crowdbench.training.models import RecurrentTrunkActor, check_action_std, gaussian_cfg
+from crowdbench.policies.nets import RecurrentCell, RecurrentTrunkActor, check_action_std, gaussian_cfg
 
 
 @dataclass(frozen=True)
@@ -71,7 +69,7 @@ class AIGConfig:
         check_action_std(self.action_std)
 
     def actor_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :class:`AIGActor` (and rsl-rl's ``actor`` config)."""
+        """Keyword arguments of :class:`AIGActor` (and of its rsl-rl adapter's ``actor`` config)."""
         return {"config": self, "hidden_dims": list(self.head_dims), "activation": "tanh",
                 "distribution_cfg": gaussian_cfg(self.action_std, self.learn_std)}
 
@@ -82,12 +80,12 @@ class AIGConfig:
         return {"predictor": self.predictor}
 
 
-class GRUWithOutput(RNN):
-    """rsl-rl's one-layer GRU followed by a Linear output layer (AIG-GST's node RNN: GRU(128→128) → Linear(128→256)).
-    Same interface as :class:`rsl_rl.modules.RNN`; the carried state is the GRU's."""
+class GRUWithOutput(RecurrentCell):
+    """A one-layer GRU followed by a Linear output layer (AIG-GST's node RNN: GRU(128→128) → Linear(128→256)).
+    Same interface as :class:`~crowdbench.policies.nets.RecurrentCell`; the carried state is the GRU's."""
 
     def __init__(self, input_size: int, hidden_size: int, output_size: int) -> None:
-        super().__init__(input_size, hidden_size, 1, "gru")
+        super().__init__(input_size, hidden_size)
         self.out = nn.Linear(hidden_size, output_size)
 
     def forward(self, input: torch.Tensor, masks: torch.Tensor | None = None,  # noqa: A002 - rsl-rl's name
@@ -96,7 +94,7 @@ class GRUWithOutput(RNN):
 
 
 class AIGActor(RecurrentTrunkActor):
-    """rsl-rl actor: AIG-GST's attention encoder → node GRU → tanh MLP head → Gaussian mean.
+    """AIG-GST actor: the attention encoder → node GRU → tanh MLP head → Gaussian mean.
 
     Observation groups (``predicted``): ``robot`` ``(·, 9)``, ``humans`` ``(·, N_max, 12)`` nearest first, ``mask``
     ``(·, N_max)``.
@@ -104,13 +102,12 @@ class AIGActor(RecurrentTrunkActor):
 
     obs_keys = ("robot", "humans", "mask")
 
-    def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int,
-                 config: AIGConfig | None = None, hidden_dims: tuple[int, ...] | list[int] = (256, 256),
-                 activation: str = "tanh", distribution_cfg: dict | None = None) -> None:
+    def __init__(self, obs: Mapping[str, torch.Tensor], output_dim: int, config: AIGConfig | None = None,
+                 hidden_dims: tuple[int, ...] | list[int] = (256, 256), activation: str = "tanh",
+                 distribution_cfg: dict | None = None) -> None:
         self.aig = cfg = config or AIGConfig()
         self.slots, self.edge_dim = obs["humans"].shape[-2], obs["humans"].shape[-1]
-        super().__init__(obs, obs_groups, obs_set, output_dim, 2 * cfg.node_embed, cfg.latent, hidden_dims,
-                         activation, distribution_cfg)
+        super().__init__(obs, output_dim, 2 * cfg.node_embed, cfg.latent, hidden_dims, activation, distribution_cfg)
         width = cfg.edge_dims[-1]
         self.robot_embed = nn.Sequential(nn.Linear(9, cfg.robot_embed), nn.ReLU())
         dims = (self.edge_dim, *cfg.edge_dims)
@@ -162,6 +159,5 @@ class AIGActor(RecurrentTrunkActor):
 
 def build_actor(model: AIGConfig, n_max: int, horizon: int = 5) -> AIGActor:
     """An untrained actor of architecture ``model`` for ``n_max`` observation slots."""
-    obs = TensorDict({"robot": torch.zeros(1, 9), "humans": torch.zeros(1, n_max, 2 + 2 * horizon),
-                      "mask": torch.zeros(1, n_max)}, batch_size=[1])
-    return AIGActor(obs, {"actor": ["robot"], "critic": ["robot"]}, "actor", 2, **model.actor_kwargs())
+    obs = {"robot": torch.zeros(1, 9), "humans": torch.zeros(1, n_max, 2 + 2 * horizon), "mask": torch.zeros(1, n_max)}
+    return AIGActor(obs, 2, **model.actor_kwargs())

@@ -16,8 +16,9 @@ The crowd is a graph whose edges carry their own recurrent state:
   critic heads (256→256→256, tanh) read.
 
 :class:`DSRNNCore` keeps all of it as one flat recurrent state per world, ``256 + slots·256 + 128`` values, behind
-the interface of ``rsl_rl.modules.RNN`` (rollout steps with an internal state; padded trajectories from stored
-initial states in the update), so :class:`DSRNNActor` trains through :mod:`crowdbench.training` like H²INT.
+the interface of :class:`~crowdbench.policies.nets.RecurrentCell` (rollout steps with an internal state; padded
+trajectories from stored initial states in the update), so :class:`DSRNNActor` trains through
+:mod:`crowdbench.training` like H²INT.
 **Partial observability** (the original saw every human; here the robot senses 5 m): a slot's spatial state is
 updated only while its pedestrian is in view and kept as it was while out of view (zero until first seen; the
 attention ignores it meanwhile). Stepping every slot on a zero input instead made a default training iteration 2.5×
@@ -27,15 +28,14 @@ slower (most pedestrians are out of view), for a state that carries no observati
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import torch
-from rsl_rl.utils import unpad_trajectories
-from tensordict import TensorDict
 from torch import nn
 
-from crowdbench.training.models import RecurrentTrunkActor, check_action_std, gaussian_cfg
+from crowdbench.policies.nets import RecurrentTrunkActor, check_action_std, gaussian_cfg, unpad_trajectories
 
 ROBOT_NODE = 7
 """Robot node features: the first 7 of the robot vector [p_x, p_y, r, g_x, g_y, v_pref, θ]."""
@@ -87,13 +87,13 @@ class DSRNNConfig:
         return SLOT_ORDERS[self.slots]
 
     def actor_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :class:`DSRNNActor` (and rsl-rl's ``actor`` config)."""
+        """Keyword arguments of :class:`DSRNNActor` (and of its rsl-rl adapter's ``actor`` config)."""
         return {"config": self, "hidden_dims": list(self.head_dims), "activation": "tanh",
                 "distribution_cfg": gaussian_cfg(self.action_std, self.learn_std)}
 
 
 class DSRNNCore(nn.Module):
-    """DS-RNN's recurrence behind ``rsl_rl.modules.RNN``'s interface (see the module docstring).
+    """DS-RNN's recurrence behind :class:`~crowdbench.policies.nets.RecurrentCell`'s interface (module docstring).
 
     Input per step: the flat observation ``(n, 9 + 3·slots)`` = robot vector (9) ‖ relative positions
     ``(slots, 2)`` flattened ‖ mask ``(slots,)``. Output: the latent ``(n, latent)``; state ``(1, n, state_dim)``.
@@ -144,7 +144,7 @@ class DSRNNCore(nn.Module):
                 hidden_state: torch.Tensor | None = None) -> torch.Tensor:
         """Rollout: ``x`` ``(n, ·)`` → ``(1, n, latent)`` from the internal state. Update: padded trajectories
         ``x`` ``(T, B, ·)`` with ``masks`` ``(T, B)`` from ``hidden_state`` ``(1, B, state_dim)`` → the valid steps
-        ``(T, n_valid, latent)`` (``rsl_rl.utils.unpad_trajectories``)."""
+        ``(T, n_valid, latent)`` (:func:`~crowdbench.policies.nets.unpad_trajectories`)."""
         if masks is None:
             h = self.hidden_state[0] if self.hidden_state is not None else x.new_zeros(x.shape[0], self.state_dim)
             out, h = self.cell(x, h)
@@ -159,7 +159,8 @@ class DSRNNCore(nn.Module):
         return unpad_trajectories(torch.stack(outs), masks)
 
     def reset(self, dones: torch.Tensor | None = None, hidden_state: torch.Tensor | None = None) -> None:
-        """As ``rsl_rl.modules.RNN.reset``: all states (to ``hidden_state`` or none) or zero those of ``dones``."""
+        """As :meth:`RecurrentCell.reset <crowdbench.policies.nets.RecurrentCell.reset>`: all states (to
+        ``hidden_state`` or none) or zero those of ``dones``."""
         if dones is None:
             self.hidden_state = hidden_state
         elif self.hidden_state is not None:
@@ -176,7 +177,7 @@ class DSRNNCore(nn.Module):
 
 
 class DSRNNActor(RecurrentTrunkActor):
-    """rsl-rl actor: DS-RNN's graph recurrence → tanh MLP head → Gaussian mean (learned state-independent std).
+    """DS-RNN actor: the graph recurrence → tanh MLP head → Gaussian mean (learned state-independent std).
 
     Observation groups (``relative_by_id``): ``robot`` ``(·, 9)``, ``humans`` ``(·, N_max, 2)`` with slot j =
     pedestrian j, ``mask`` ``(·, N_max)``.
@@ -184,13 +185,12 @@ class DSRNNActor(RecurrentTrunkActor):
 
     obs_keys = ("robot", "humans", "mask")
 
-    def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int,
-                 config: DSRNNConfig | None = None, hidden_dims: tuple[int, ...] | list[int] = (256, 256),
-                 activation: str = "tanh", distribution_cfg: dict | None = None) -> None:
+    def __init__(self, obs: Mapping[str, torch.Tensor], output_dim: int, config: DSRNNConfig | None = None,
+                 hidden_dims: tuple[int, ...] | list[int] = (256, 256), activation: str = "tanh",
+                 distribution_cfg: dict | None = None) -> None:
         self.dsrnn = config = config or DSRNNConfig()
         self.slots = obs["humans"].shape[-2]
-        super().__init__(obs, obs_groups, obs_set, output_dim, 9 + 3 * self.slots, config.latent, hidden_dims,
-                         activation, distribution_cfg)
+        super().__init__(obs, output_dim, 9 + 3 * self.slots, config.latent, hidden_dims, activation, distribution_cfg)
 
     def make_rnn(self, z_dim: int, latent: int) -> nn.Module:
         return DSRNNCore(self.dsrnn, self.slots)
@@ -211,6 +211,5 @@ class DSRNNActor(RecurrentTrunkActor):
 
 def build_actor(model: DSRNNConfig, n_max: int) -> DSRNNActor:
     """An untrained actor of architecture ``model`` for ``n_max`` observation slots."""
-    obs = TensorDict({"robot": torch.zeros(1, 9), "humans": torch.zeros(1, n_max, 2), "mask": torch.zeros(1, n_max)},
-                     batch_size=[1])
-    return DSRNNActor(obs, {"actor": ["robot"], "critic": ["robot"]}, "actor", 2, **model.actor_kwargs())
+    obs = {"robot": torch.zeros(1, 9), "humans": torch.zeros(1, n_max, 2), "mask": torch.zeros(1, n_max)}
+    return DSRNNActor(obs, 2, **model.actor_kwargs())

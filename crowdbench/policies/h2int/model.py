@@ -14,21 +14,21 @@ mean of the valid tokens), ``standard`` (plain residual connections instead of g
 Two implementations of the encoder, one function: :meth:`H2INTEncoder.forward` is the eager reference (padded
 tokens, plain PyTorch; the export path and the test oracle), :meth:`H2INTEncoder.packed` the fast path used for
 training, rollouts and evaluation (valid tokens only, :mod:`._kernels.packed`), tested equal to it, forward and
-gradients, for every variant. The actor and critic are :mod:`crowdbench.training.models`' shared-trunk models.
+gradients, for every variant. The actor is a plain-torch :class:`~crowdbench.policies.nets.RecurrentTrunkActor`
+(training wraps it for rsl-rl: :func:`crowdbench.training.models.rsl_rl_actor`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import torch
 import torch.nn as nn
-from rsl_rl.modules import EmpiricalNormalization
-from tensordict import TensorDict
 
 from crowdbench.policies.h2int._kernels.packed import packed_encode
-from crowdbench.training.models import RecurrentTrunkActor, check_action_std, gaussian_cfg
+from crowdbench.policies.nets import RecurrentTrunkActor, RunningNorm, check_action_std, gaussian_cfg
 
 VARIANTS = ("h2int", "flat", "meanpool", "standard")
 EDGE_SCALE = 5.0
@@ -105,7 +105,7 @@ class H2INTEncoder(nn.Module):
         if variant not in VARIANTS:
             raise ValueError(f"variant={variant!r}; valid choices: {', '.join(VARIANTS)}")
         self.edge_scale = EDGE_SCALE
-        self.robot_norm = EmpiricalNormalization(9)
+        self.robot_norm = RunningNorm(9)
         self.robot_mlp = nn.Sequential(nn.Linear(9, d_model), nn.ReLU(), nn.Linear(d_model, d_model))
         self.edge_mlp = nn.Sequential(nn.Linear(2, d_model), nn.ReLU(), nn.Linear(d_model, d_model))
         self.type_emb = nn.Embedding(2, d_model)
@@ -165,26 +165,25 @@ class H2INTConfig:
         object.__setattr__(self, "head_dims", tuple(int(h) for h in self.head_dims))
 
     def actor_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments of :class:`H2INTActor` (and rsl-rl's ``actor`` config)."""
+        """Keyword arguments of :class:`H2INTActor` (and of its rsl-rl adapter's ``actor`` config)."""
         return {"variant": self.variant, "d_model": self.d_model, "heads": self.heads, "ffn": self.ffn,
                 "gru_hidden": self.gru_hidden, "hidden_dims": list(self.head_dims),
                 "distribution_cfg": gaussian_cfg(self.action_std, learn_std=False)}
 
 
 class H2INTActor(RecurrentTrunkActor):
-    """rsl-rl actor: H²INT encoder → GRU → MLP head → Gaussian mean (fixed covariance via ``distribution_cfg``).
+    """H²INT actor: encoder → GRU → MLP head → Gaussian mean (fixed covariance via ``distribution_cfg``).
 
     Observation groups: ``robot`` ``(·, 9)``, ``humans`` ``(·, N_max, 2)``, ``mask`` ``(·, N_max)`` (1 = valid).
     """
 
     obs_keys = ("robot", "humans", "mask")
 
-    def __init__(self, obs: TensorDict, obs_groups: dict, obs_set: str, output_dim: int, variant: str = "h2int",
-                 d_model: int = 32, heads: int = 4, ffn: int = 64, gru_hidden: int = 64,
-                 hidden_dims: tuple[int, ...] | list[int] = (64,), activation: str = "elu",
-                 distribution_cfg: dict | None = None) -> None:
-        super().__init__(obs, obs_groups, obs_set, output_dim, d_model, gru_hidden, hidden_dims, activation,
-                         distribution_cfg)
+    def __init__(self, obs: Mapping[str, torch.Tensor], output_dim: int, variant: str = "h2int", d_model: int = 32,
+                 heads: int = 4, ffn: int = 64, gru_hidden: int = 64, hidden_dims: tuple[int, ...] | list[int] = (64,),
+                 activation: str = "elu", distribution_cfg: dict | None = None) -> None:
+        super().__init__(obs, output_dim, d_model, gru_hidden, hidden_dims, activation, distribution_cfg)
+        self.slots = obs["humans"].shape[-2]
         self.encoder = H2INTEncoder(obs["humans"].shape[-2], variant, d_model, heads, ffn)
 
     def encode_samples(self, obs):
@@ -193,13 +192,12 @@ class H2INTActor(RecurrentTrunkActor):
     def work(self, obs):
         return (obs["mask"] > 0.5).sum(-1) + 1  # tokens per sample
 
-    def update_normalization(self, obs: TensorDict) -> None:
+    def update_normalization(self, obs: Mapping[str, torch.Tensor]) -> None:
         if self.training:
             self.encoder.robot_norm.update(obs["robot"])
 
 
 def build_actor(model: H2INTConfig, n_max: int) -> H2INTActor:
     """An untrained actor of architecture ``model`` for ``n_max`` observation slots."""
-    obs = TensorDict({"robot": torch.zeros(1, 9), "humans": torch.zeros(1, n_max, 2), "mask": torch.zeros(1, n_max)},
-                     batch_size=[1])
-    return H2INTActor(obs, {"actor": ["robot"], "critic": ["robot"]}, "actor", 2, **model.actor_kwargs())
+    obs = {"robot": torch.zeros(1, 9), "humans": torch.zeros(1, n_max, 2), "mask": torch.zeros(1, n_max)}
+    return H2INTActor(obs, 2, **model.actor_kwargs())

@@ -2,7 +2,7 @@
 
 Deterministic (the Gaussian's mean), one GRU state per world, the packed encoder (:meth:`H2INTEncoder.packed
 <crowdbench.policies.h2int.model.H2INTEncoder.packed>`) under ``torch.inference_mode``
-(:class:`~crowdbench.policies.recurrent.RecurrentActorPolicy`).
+(:class:`~crowdbench.policies.recurrent.TrainedRecurrentPolicy`).
 """
 
 from __future__ import annotations
@@ -10,13 +10,9 @@ from __future__ import annotations
 import os
 from typing import Any
 
-from crowdbench.config import WorldConfig
-from crowdbench.policies.base import register
+from crowdbench.policies.h2int import NAME
 from crowdbench.policies.h2int.model import H2INTActor, H2INTConfig, build_actor
-from crowdbench.policies.recurrent import RecurrentActorPolicy
-from crowdbench.policies.recurrent import load_actor as load_recurrent
-
-METHOD = "h2int"
+from crowdbench.policies.recurrent import TrainedRecurrentPolicy
 
 
 def model_config(ckpt: dict[str, Any]) -> H2INTConfig:
@@ -27,12 +23,10 @@ def model_config(ckpt: dict[str, Any]) -> H2INTConfig:
 def load_actor(checkpoint: str | os.PathLike | None = None) -> tuple[H2INTActor, dict[str, Any]]:
     """The actor of a checkpoint (path, shipped name such as ``"meanpool"``, or ``None`` for the shipped H²INT) in
     eval mode, and the checkpoint's metadata (variant, iteration, env steps, seed, path)."""
-    actor, cfg, meta = load_recurrent(METHOD, checkpoint, model_config, build_actor)
-    return actor, {**meta, "variant": cfg.variant}
+    return H2INTPolicy.load_actor(checkpoint)
 
 
-@register(METHOD)
-class H2INTPolicy(RecurrentActorPolicy):
+class H2INTPolicy(TrainedRecurrentPolicy):
     """The trained H²INT policy.
 
     Args:
@@ -44,10 +38,10 @@ class H2INTPolicy(RecurrentActorPolicy):
     """
 
     observation = "relative"
+    method = NAME
+    model_config = H2INTConfig
+    build_actor = staticmethod(build_actor)
 
-    def __init__(self, config: WorldConfig | None = None, checkpoint: str | None = None,
-                 actor: H2INTActor | None = None) -> None:
-        meta: dict[str, Any] = {}
-        if actor is None:
-            actor, meta = load_actor(checkpoint)
-        super().__init__(config, actor, actor.encoder.pos_emb.num_embeddings - 1, meta)
+    @classmethod
+    def describe(cls, model: H2INTConfig) -> dict[str, Any]:
+        return {"variant": model.variant}

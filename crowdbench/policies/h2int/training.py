@@ -3,29 +3,20 @@
 
 from __future__ import annotations
 
-from typing import Any
-
+from crowdbench.policies.h2int import NAME
 from crowdbench.policies.h2int.model import H2INTActor, H2INTConfig
 from crowdbench.policies.h2int.policy import H2INTPolicy
-from crowdbench.training.methods import PPOMethod
+from crowdbench.policies.recurrent_training import RecurrentPPOMethod
 
 
-class H2INTMethod(PPOMethod):
+class H2INTMethod(RecurrentPPOMethod):
     """H²INT and its ablations (``H2INTConfig.variant``)."""
 
-    name = "h2int"
+    name = NAME
     model_config = H2INTConfig
     actor_class = H2INTActor
+    policy_class = H2INTPolicy
     observation = "relative"
-
-    def actor_cfg(self, model: H2INTConfig) -> dict[str, Any]:
-        return model.actor_kwargs()
-
-    def critic_cfg(self, model: H2INTConfig) -> dict[str, Any]:
-        return {"hidden_dims": list(model.head_dims)}
-
-    def policy(self, config: Any, actor: H2INTActor) -> H2INTPolicy:
-        return H2INTPolicy(config, actor=actor)
 
     def label(self, model: H2INTConfig) -> str:
         return model.variant
