@@ -25,10 +25,12 @@ from typing import Any
 
 import numpy as np
 
+from crowdbench import __version__, checkpoints
 from crowdbench.evaluation import run_episodes, summarize
-from crowdbench.io import write_text
+from crowdbench.io import atomic_path, write_text
 from crowdbench.metrics import wilson
-from crowdbench.policies import REFERENCE_METHOD, make_policy, methods
+from crowdbench.policies import POLICIES, REFERENCE_METHOD, make_policy, methods
+from crowdbench.worlds.digest import crowd_digest
 
 REGIMES = {"High": 0.7, "Medium": 0.5, "Low": 0.3}
 
@@ -191,7 +193,6 @@ def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[s
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from crowdbench.io import atomic_path
 
     groups = groups or {}
     fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100, sharey=True)
@@ -243,7 +244,6 @@ def plot_trends(result_files: list[str], path: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from crowdbench.io import atomic_path
 
     fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), dpi=100, sharey=True)
     for f in result_files:
@@ -301,8 +301,6 @@ tier than ``positions`` (the ``sensing`` argument) get their own section of the 
 def trained_crowd(path: str) -> str | None:
     """The crowd digest (:func:`~crowdbench.worlds.digest.crowd_digest`) a checkpoint records it was trained on;
     None for checkpoints that do not say (trained before crowds were recorded)."""
-    from crowdbench import checkpoints
-
     return _trained_crowd(path, checkpoints.file_sha256(path))
 
 
@@ -324,17 +322,15 @@ def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
     other shipped training seeds (checkpoints ``<name>-seed<k>``, group ``seeds:<label>``)."""
     import re
 
-    from crowdbench.checkpoints import resolve, shipped_names
-    from crowdbench.worlds.digest import crowd_digest
 
     out: dict[str, Entry] = {}
     current = crowd_digest()
     for e in methods:
         ckpt = e.policy_kwargs().get("checkpoint")
-        names = shipped_names(e.policy) if ckpt else []
+        names = checkpoints.shipped_names(e.policy) if ckpt else []
         if ckpt and ckpt not in names:
             continue
-        if ckpt and trained_crowd(resolve(e.policy, ckpt)) != current:
+        if ckpt and trained_crowd(checkpoints.resolve(e.policy, ckpt)) != current:
             STALE[e.label] = ("trained on crowdbench's former crowd, not on the current CrowdNav++ one; back once "
                               "retrained (`crowdbench train`)")
             continue
@@ -342,7 +338,7 @@ def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
         if e.group in ("main", "ablation") and ckpt:
             seeds = sorted((int(m[1]), n) for n in names if (m := re.fullmatch(rf"{re.escape(ckpt)}-seed(\d+)", n)))
             for k, name in seeds:
-                if trained_crowd(resolve(e.policy, name)) != current:
+                if trained_crowd(checkpoints.resolve(e.policy, name)) != current:
                     continue
                 seed_entry = Entry(f"{e.label}-seed{k}", e.policy, (("checkpoint", name),), f"seeds:{e.label}")
                 out[seed_entry.slug] = seed_entry
@@ -362,8 +358,6 @@ def board_entries() -> dict[str, Entry]:
 def parse_entry(spec: str) -> Entry:
     """``LABEL=POLICY`` or ``LABEL=POLICY@CHECKPOINT`` (a policy registered in :data:`~crowdbench.policies.POLICIES`,
     e.g. through the ``crowdbench.policies`` entry point) → :class:`Entry`."""
-    from crowdbench.policies import POLICIES
-
     if "=" not in spec:
         raise ValueError(f"--add {spec!r}: expected LABEL=POLICY or LABEL=POLICY@CHECKPOINT")
     label, rest = (s.strip() for s in spec.split("=", 1))
@@ -376,8 +370,6 @@ def parse_entry(spec: str) -> Entry:
 def scenario_digest(tables: tuple[str, ...] = ("I", "II", "III")) -> str:
     """SHA-256 (16 hex digits) of everything that defines the crowds of the grid (:func:`~crowdbench.worlds.digest.
     crowd_digest` over its layouts and pedestrian models) — a cached result is stale when the scenario changes."""
-    from crowdbench.worlds.digest import crowd_digest
-
     grid = cells(tables)
     return crowd_digest(tuple(sorted({c.layout for c in grid})), tuple(sorted({c.model for c in grid})))
 
@@ -390,7 +382,6 @@ def policy_code(policy: str) -> str:
     import hashlib
     import inspect
 
-    from crowdbench.policies import POLICIES
 
     factory = POLICIES.get(policy)
     files: set[Path] = set()
@@ -426,7 +417,6 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
     (:func:`scenario_digest`)."""
     import os
 
-    from crowdbench import checkpoints
 
     kwargs = entry.policy_kwargs()
     digest = None
@@ -436,7 +426,6 @@ def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
     if ckpt and os.path.exists(ckpt):
         digest = checkpoints.file_sha256(ckpt)
     shown = {k: (v if k != "checkpoint" or not os.path.exists(v) else os.path.relpath(v)) for k, v in kwargs.items()}
-    from crowdbench import __version__
 
     return {"policy": entry.policy, "kwargs": shown, "sensing": entry_sensing(entry), "checkpoint_sha256": digest,
             "code": policy_code(entry.policy), "crowdbench": __version__, "episodes": episodes, "seed": seed,
@@ -584,8 +573,6 @@ def training_budgets(fingerprints: dict[str, dict[str, Any]]) -> dict[str, dict[
     """Each label's training budget (:func:`crowdbench.checkpoints.training_budget`), read from its checkpoint when
     the file on disk is the one its fingerprint names (same SHA-256); labels without a checkpoint, or whose file is
     missing or differs, are left out."""
-    from crowdbench import checkpoints
-
     out = {}
     for label, fp in fingerprints.items():
         name, sha = (fp.get("kwargs") or {}).get("checkpoint"), fp.get("checkpoint_sha256")

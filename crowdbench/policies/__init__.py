@@ -12,6 +12,8 @@ their robot policy); each learned method is a sub-package whose ``__init__`` reg
 
 from __future__ import annotations
 
+from importlib import import_module
+
 from crowdbench import checkpoints
 from crowdbench.policies.base import POLICIES, RobotPolicy, make_policy, register
 from crowdbench.policies.classic import LinearPolicy, ORCAPolicy, SocialForcePolicy
@@ -44,8 +46,9 @@ REFERENCE_METHOD = "h2int"
 """The paper's own method: it heads the ablation tables and is the default of ``crowdbench tables``, ``panels``,
 ``export`` and training."""
 
-from crowdbench.policies import aig, dsrnn, h2int, value  # noqa: E402 - each registers its Method
+for _package in ("h2int", "value", "dsrnn", "aig"):  # each registers its Method(s); this order is the board's
+    import_module(f"{__name__}.{_package}")
 
 __all__ = ["DEFAULT_POLICY", "METHODS", "POLICIES", "REFERENCE_METHOD", "BoardEntry", "LinearPolicy", "Method",
-           "ORCAPolicy", "RobotPolicy", "SocialForcePolicy", "aig", "dsrnn", "h2int", "make_policy", "method_of",
-           "methods", "register", "register_method", "trained_by", "value"]
+           "ORCAPolicy", "RobotPolicy", "SocialForcePolicy", "make_policy", "method_of", "methods", "register",
+           "register_method", "trained_by"]
