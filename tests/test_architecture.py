@@ -101,7 +101,7 @@ POLICY_INFRA = {"base", "method", "classic", "nets", "recurrent"}
 and ``recurrent_training``, the PPO bindings' shared base)."""
 LAYERS: dict[str, set[str]] = {
     # unit → the crowdbench units it may import (a unit: a sub-package, or a top-level module)
-    "validate": set(), "io": set(), "geometry": set(), "progress": set(),
+    "validate": set(), "io": set(), "geometry": set(), "progress": set(), "nn": set(),
     "registry": {"validate"},
     "config": {"validate"},
     "checkpoints": {"io", "registry"},
@@ -111,8 +111,8 @@ LAYERS: dict[str, set[str]] = {
     "humans": {"datasets", "geometry", "registry", "validate"},
     "worlds": {"config", "datasets", "geometry", "humans", "registry"},
     "robots": {"config", "registry", "worlds"},
-    "predictors": {"__version__", "checkpoints", "config", "io", "registry", "robots", "worlds"},
-    "policies": {"checkpoints", "config", "humans", "io", "registry", "robots"},
+    "predictors": {"__version__", "checkpoints", "config", "io", "nn", "registry", "robots", "worlds"},
+    "policies": {"checkpoints", "config", "humans", "io", "nn", "registry", "robots"},
     "envs": {"config", "humans", "policies", "render", "robots", "worlds"},
     "evaluation": {"config", "humans", "metrics", "policies", "robots", "worlds"},
     "training": {"__version__", "checkpoints", "cli", "config", "envs", "evaluation", "humans", "io", "policies",

@@ -24,8 +24,10 @@ from typing import Any
 
 import numpy as np
 import torch
+import torch.nn.functional as F  # noqa: N812 - the usual alias
 from torch import nn
 
+from crowdbench.nn.ragged import ragged_attention
 from crowdbench.predictors.base import HORIZON, OBSERVED, PREDICTORS, Predictor, Track
 
 METHOD = "gst"
@@ -66,8 +68,40 @@ class GSTModel(nn.Module):
         self.temporal = nn.LSTMCell(cfg.embed, cfg.lstm)
         self.head = nn.Linear(cfg.lstm, 5)
 
+    def _attend(self, x: torch.Tensor, offsets: np.ndarray) -> torch.Tensor:
+        """One pre-LayerNorm Transformer layer (the weights of ``self.spatial``) on the packed tokens ``x`` ``(P, E)``,
+        scene ``b`` owning rows ``offsets[b]:offsets[b+1]``: attention within each scene's rows
+        (:func:`~crowdbench.nn.ragged.ragged_attention`), every other product on the ``P`` tokens at once."""
+        for layer in self.spatial.layers:
+            attn = layer.self_attn
+            E = x.shape[-1]
+            h = F.layer_norm(x, (E,), layer.norm1.weight, layer.norm1.bias, layer.norm1.eps)
+            qkv = F.linear(h, attn.in_proj_weight, attn.in_proj_bias)  # (P, 3E)
+            o = ragged_attention(qkv[:, :E], qkv[:, E:2 * E], qkv[:, 2 * E:], offsets, False, attn.num_heads)
+            x = x + F.linear(o, attn.out_proj.weight, attn.out_proj.bias)
+            h = F.layer_norm(x, (E,), layer.norm2.weight, layer.norm2.bias, layer.norm2.eps)
+            x = x + layer.linear2(F.relu(layer.linear1(h)))
+        return x
+
     def _step(self, pos: torch.Tensor, disp: torch.Tensor, present: torch.Tensor,
               hc: tuple[torch.Tensor, torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor]:
+        """One observed or decoded step on the pedestrians ``present`` ``(n, A)``: tokens of ``pos``, ``disp``
+        ``(n, A, 2)`` → spatial layer → LSTM cell; the states ``hc`` ``(n·A, L)`` of absent slots stay."""
+        n, A, _ = pos.shape
+        idx = present.reshape(-1).nonzero().squeeze(-1)
+        if idx.numel() == 0:
+            return hc
+        x = self.embed(torch.cat([pos.reshape(n * A, 2).index_select(0, idx) / SCALE,
+                                         disp.reshape(n * A, 2).index_select(0, idx)], -1))
+        offsets = np.zeros(n + 1, np.int64)
+        np.cumsum(present.sum(-1).numpy(), out=offsets[1:])
+        z = self._attend(x, offsets)
+        h, c = self.temporal(z, (hc[0].index_select(0, idx), hc[1].index_select(0, idx)))
+        return hc[0].index_copy(0, idx, h), hc[1].index_copy(0, idx, c)
+
+    def _step_reference(self, pos: torch.Tensor, disp: torch.Tensor, present: torch.Tensor,
+                        hc: tuple[torch.Tensor, torch.Tensor]) -> tuple[torch.Tensor, torch.Tensor]:
+        """:meth:`_step` in plain torch modules on every slot (the reference the packed step is tested against)."""
         n, A, _ = pos.shape
         tokens = self.embed(torch.cat([pos / SCALE, disp], -1))
         pad = ~present
@@ -77,8 +111,11 @@ class GSTModel(nn.Module):
         keep = present.reshape(n * A, 1)
         return torch.where(keep, h, hc[0]), torch.where(keep, c, hc[1])
 
-    def forward(self, pos: torch.Tensor, seen: torch.Tensor
+    def forward(self, pos: torch.Tensor, seen: torch.Tensor, reference: bool = False
                 ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """``reference``: every slot through the plain modules (:meth:`_step_reference`) instead of the packed
+        step; equal up to rounding (tested)."""
+        step_fn = self._step_reference if reference else self._step
         n, T, A, _ = pos.shape
         pos = torch.where(seen.unsqueeze(-1), pos, 0.0)  # what was not seen is not an input (padding may be far away)
         h = pos.new_zeros(n * A, self.cfg.lstm)
@@ -87,12 +124,12 @@ class GSTModel(nn.Module):
         for t in range(T):
             prev_ok = seen[:, t] & seen[:, t - 1] if t else torch.zeros_like(seen[:, 0])
             disp = torch.where(prev_ok.unsqueeze(-1), pos[:, t] - pos[:, t - 1 if t else 0], 0.0)
-            hc = self._step(pos[:, t], disp, seen[:, t], hc)
+            hc = step_fn(pos[:, t], disp, seen[:, t], hc)
         now = seen[:, -1]
         last, step = pos[:, -1], disp
         means, stds, rhos = [], [], []
         var = pos.new_zeros(n, A, 2)
-        for _ in range(self.cfg.horizon):
+        for k in range(self.cfg.horizon):
             out = self.head(hc[0]).view(n, A, 5)
             step, sd = step + out[..., :2], torch.exp(out[..., 2:4].clamp(-6.0, 3.0))  # a change of displacement
             last = last + step
@@ -100,7 +137,8 @@ class GSTModel(nn.Module):
             means.append(last)
             stds.append(var.sqrt())
             rhos.append(torch.tanh(out[..., 4]) * 0.95)
-            hc = self._step(last, step, now, hc)
+            if k + 1 < self.cfg.horizon:  # the last decoded state feeds nothing
+                hc = step_fn(last, step, now, hc)
         return torch.stack(means, 2), torch.stack(stds, 2), torch.stack(rhos, 2)
 
 

@@ -41,6 +41,32 @@ def test_encoder_sees_only_pedestrians_in_view_and_no_slot_order():
         torch.testing.assert_close(actor.encode_samples(perm_obs), z, rtol=1e-4, atol=1e-5)
 
 
+def _grads(actor, fn, obs) -> dict[str, torch.Tensor]:
+    actor.zero_grad()
+    fn(obs).square().sum().backward()
+    return {n: p.grad.clone() for n, p in actor.named_parameters() if p.grad is not None}
+
+
+def test_packed_encoder_equals_the_originals_padded_layout_with_gradients():
+    """The fast path (pedestrians packed, ragged attention, the two input maps as one product) computes the
+    original's function: outputs and every parameter's gradient as the padded reference, for batches with fewer and
+    with more pedestrians than the attention width (both branches of the product). In float64, so that rounding
+    (the float32 attention scale of the ragged kernel, ~1e-8) cannot hide a wrong term."""
+    torch.manual_seed(0)
+    actor = build_actor(AIGConfig(edge_dims=(16, 8), heads=2, human_embed=8, attention=4), K).double()
+    g = torch.Generator().manual_seed(3)
+    for n in (3, 40):  # 3 rows: ≤ 8 pedestrians (two maps in turn); 40 rows: > 8 (one fused map)
+        obs = {k: v.double() for k, v in _obs(n, g, visible=1.0).items()}
+        obs["mask"][0] = 0.0  # a row with nobody in view
+        obs["mask"][1] = 1.0
+        torch.testing.assert_close(actor.encode_samples(obs), actor.encode_samples_reference(obs),
+                                   rtol=1e-6, atol=1e-7)
+        fast, ref = _grads(actor, actor.encode_samples, obs), _grads(actor, actor.encode_samples_reference, obs)
+        assert set(fast) == set(ref)
+        for name, gr in ref.items():  # the keys' biases have a zero gradient (softmax is shift-invariant)
+            torch.testing.assert_close(fast[name], gr, rtol=1e-6, atol=1e-6, msg=name)
+
+
 def test_sizes_are_the_originals():
     actor = build_actor(AIGConfig(), 20)
     assert actor.self_attn.embed_dim == 512 and actor.self_attn.num_heads == 8

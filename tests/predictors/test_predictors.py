@@ -117,6 +117,30 @@ def test_gst_has_no_pedestrian_order_and_an_untrained_step_is_finite():
     torch.testing.assert_close(mean2[now[:, perm]], mean[:, perm][now[:, perm]], rtol=1e-4, atol=1e-5)
 
 
+def test_gst_packed_steps_equal_the_plain_modules_with_gradients():
+    """The fast path (pedestrians present packed, ragged attention) computes the plain modules' function on every
+    slot: means, deviations, correlations and every parameter's gradient, up to rounding."""
+    torch.manual_seed(0)
+    m = GSTModel(GSTConfig(embed=16, heads=4, lstm=8))
+    g = torch.Generator().manual_seed(2)
+    pos = torch.randn(6, 5, 7, 2, generator=g) * 3
+    seen = torch.rand(6, 5, 7, generator=g) < 0.5
+    seen[0] = False  # a scene with nobody
+    seen[1, :4] = False  # … seen only now
+    grads, outs = [], []
+    for reference in (False, True):
+        m.zero_grad()
+        out = m(pos, seen, reference=reference)
+        sum(o.square().sum() for o in out).backward()
+        grads.append({n: p.grad.clone() for n, p in m.named_parameters()})
+        outs.append([o.detach() for o in out])
+    for a, b in zip(*outs, strict=True):
+        torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-5)
+    for name, gr in grads[1].items():
+        scale = max(float(gr.abs().max()), 1e-8)
+        torch.testing.assert_close(grads[0][name] / scale, gr / scale, rtol=0, atol=1e-4, msg=name)
+
+
 def test_gst_learns_saves_loads_safely_and_predicts_in_the_observation(tmp_path):
     data = record(RecordConfig(worlds=6, steps=160, stride=2, seed=5), str(tmp_path / "d.npz"))
     assert data["valid"].any() and set(data) == {"pos", "seen", "future", "valid", "world"}

@@ -27,9 +27,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
 import torch
+import torch.nn.functional as F  # noqa: N812 - the usual alias
 from torch import nn
 
+from crowdbench.nn.ragged import ragged_attention
 from crowdbench.policies.nets import RecurrentCell, RecurrentTrunkActor, check_action_std, gaussian_cfg
 
 
@@ -134,7 +137,58 @@ class AIGActor(RecurrentTrunkActor):
 
     def encode_samples(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         """The node GRU's input ``(n, 128)`` from ``robot`` ``(n, 9)``, ``humans`` ``(n, N_max, 12)`` and ``mask``
-        ``(n, N_max)`` (nearest first: truncated to the batch's most pedestrians in view, exact under the masks)."""
+        ``(n, N_max)`` (nearest first).
+
+        The pedestrians in view are packed into ``(P, ·)`` rows (row ``b`` of the batch owning ``offsets[b]:
+        offsets[b+1]``): every per-pedestrian product runs once over the ``P`` rows, the self-attention within each
+        row's pedestrians (:func:`crowdbench.nn.ragged.ragged_attention`), the robot–pedestrian softmax per segment;
+        the original's two consecutive linear maps per attention input (``self.q`` then the attention's own input
+        projection) run as one product of the two (the same function; its gradient reaches both). Equal to
+        :meth:`encode_samples_reference` (the original's padded layout) up to rounding (tested)."""
+        robot, mask = obs["robot"], obs["mask"] > 0.5
+        n = robot.shape[0]
+        r = self.robot_embed(torch.cat([robot[:, 7:9], robot[:, :7]], -1))
+        attended = r.new_zeros(n, self.aig.human_embed)
+        k = int(mask.sum(-1).max()) if n else 0
+        rows = mask[:, 0]  # someone in view (nearest first)
+        if k:
+            m = mask[rows, :k]
+            counts = m.sum(-1)  # (R,) pedestrians in view per row, nearest first: row b owns packed rows
+            offsets = np.zeros(m.shape[0] + 1, np.int64)  # offsets[b]:offsets[b+1]
+            np.cumsum(counts.numpy(), out=offsets[1:])
+            e = self.edge_embed(obs["humans"][rows, :k][m])  # (P, W) packed
+            W = e.shape[-1]
+            qkv = self._qkv(e)  # (P, 3W)
+            z = ragged_attention(qkv[:, :W], qkv[:, W:2 * W], qkv[:, 2 * W:], offsets, False,
+                                 self.self_attn.num_heads)
+            h = self.human_out(self.self_attn.out_proj(z))  # (P, human_embed)
+            seg = torch.repeat_interleave(torch.arange(len(counts)), counts)  # (P,) each pedestrian's row
+            score = (self.key(h) * self.query(r[rows]).index_select(0, seg)).sum(-1)
+            score = score * (self.slots / math.sqrt(self.aig.attention))  # (P,)
+            top = score.new_full((len(counts),), -torch.inf).scatter_reduce(0, seg, score.detach(), "amax")
+            w = torch.exp(score - top.index_select(0, seg))
+            w = w / w.new_zeros(len(counts)).index_add(0, seg, w).index_select(0, seg)  # softmax within each row
+            pooled = h.new_zeros(len(counts), h.shape[-1]).index_add(0, seg, w.unsqueeze(-1) * h)
+            attended = attended.index_put((rows.nonzero().squeeze(-1),), pooled)
+        return torch.cat([self.robot_node(r), self.edge_node(attended)], -1)
+
+    def _qkv(self, e: torch.Tensor) -> torch.Tensor:
+        """The attention inputs ``(P, 3W)`` of pedestrian embeddings ``e`` ``(P, W)``: the attention's input
+        projection after ``self.q`` / ``self.k`` / ``self.v``, as one map ``in_proj ∘ q`` (``W³`` products each, once)
+        when there are more pedestrians than the width ``W``, else the two maps in turn."""
+        W = e.shape[-1]
+        win, bin_ = self.self_attn.in_proj_weight.view(3, W, W), self.self_attn.in_proj_bias.view(3, W)
+        wq = torch.stack([self.q.weight, self.k.weight, self.v.weight])  # (3, W, W)
+        bq = torch.stack([self.q.bias, self.k.bias, self.v.bias])
+        if e.shape[0] <= W:
+            first = torch.baddbmm(bq.unsqueeze(1), e.expand(3, -1, -1), wq.transpose(1, 2))  # (3, P, W)
+            return torch.baddbmm(bin_.unsqueeze(1), first, win.transpose(1, 2)).permute(1, 0, 2).reshape(-1, 3 * W)
+        weight = (win @ wq).reshape(3 * W, W)
+        bias = ((win @ bq.unsqueeze(-1)).squeeze(-1) + bin_).reshape(3 * W)
+        return F.linear(e, weight, bias)
+
+    def encode_samples_reference(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        """:meth:`encode_samples` as the original writes it (plain modules on the padded ``(rows, k)`` layout)."""
         robot, mask = obs["robot"], obs["mask"] > 0.5
         n = robot.shape[0]
         r = self.robot_embed(torch.cat([robot[:, 7:9], robot[:, :7]], -1))

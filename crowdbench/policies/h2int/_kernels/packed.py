@@ -3,10 +3,10 @@
 ``H2INTEncoder.forward`` (the reference) pads every sample to the batch's largest crowd. :func:`packed_encode`
 computes the same function (same parameters, same result to float rounding) with every sample's tokens — the robot,
 then the pedestrians it sees, in column order — stacked into one ``(T, d)`` array: the linear layers, layer norms,
-gates and feed-forward blocks run once over all ``T`` tokens as large, efficient kernels, attention runs within each
-sample's rows (:mod:`.ragged`), and mean pooling (the ``meanpool`` variant) is a segment mean. The last stage
-computes the robot tokens only (every other token's output would be discarded). Differentiable through ordinary
-autograd (the attention and the gates have their own backward).
+gates and feed-forward blocks run once over all ``T`` tokens as large, efficient kernels, attention runs within
+each sample's rows (:mod:`crowdbench.nn.ragged`), and mean pooling (the ``meanpool`` variant) is a segment mean. The
+last stage computes the robot tokens only (every other token's output would be discarded). Differentiable through
+ordinary autograd (the attention and the gates have their own backward).
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ import numpy as np
 import torch
 import torch.nn as nn
 
+from crowdbench.nn.ragged import ragged_attention
 from crowdbench.policies.h2int._kernels.fast_linear import linear, padded_rows
 from crowdbench.policies.h2int._kernels.fused_gate import fused_gate
-from crowdbench.policies.h2int._kernels.ragged import ragged_attention
 
 
 def _apply(module: nn.Module, x: torch.Tensor) -> torch.Tensor:
@@ -71,9 +71,9 @@ def packed_encode(encoder: nn.Module, robot: torch.Tensor, edges: torch.Tensor, 
     """``encoder(robot, edges, valid)`` for ``robot`` ``(B, 9)``, ``edges`` ``(B, N, 2)`` [m], ``valid`` ``(B, N)``
     bool → context ``(B, d)``, on packed tokens (see the module docstring).
 
-    The token array carries padding rows up to :func:`.fast_linear.padded_rows` (copies of token 0, never attended
-    to; their outputs are dropped and their gradients are exactly zero), so the linear layers never copy their inputs
-    to pad them."""
+    The token array carries padding rows up to :func:`.fast_linear.padded_rows` (copies of token 0,
+    never attended to; their outputs are dropped and their gradients are exactly zero), so the linear layers never
+    copy their inputs to pad them."""
     B = robot.shape[0]
     b_idx, col = valid.nonzero(as_tuple=True)  # row-major: sample by sample, columns ascending
     E = b_idx.shape[0]

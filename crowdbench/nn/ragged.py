@@ -1,10 +1,11 @@
 """Multi-head attention within variable-size token sets ("ragged" batches), forward and backward in numba.
 
-The H²INT encoder attends within each sample's own tokens — the robot and the 0–20 pedestrians it sees. Packing
-only the valid tokens of all samples into one ``(T, d)`` array (sample ``b`` owns rows ``offsets[b]:offsets[b+1]``,
-robot first) removes all padding, and lets every linear layer run as one large matrix product. What remains is the
-attention core, a few thousand multiply-adds per sample over 8-dimensional heads: PyTorch's scaled-dot-product
-kernels spend ≈ 10 µs per sample on it (blocking and dispatch built for long sequences); these loops ≈ 1 µs.
+The H²INT encoder attends within each sample's own tokens — the robot and the 0–20 pedestrians it sees — and so do
+AIG-GST's pedestrian self-attention and the GST predictor's spatial layer. Packing only the valid tokens of all
+samples into one ``(T, d)`` array (sample ``b`` owns rows ``offsets[b]:offsets[b+1]``) removes all padding, and lets
+every linear layer run as one large matrix product. What remains is the attention core, a few thousand
+multiply-adds per sample over 8-dimensional heads: PyTorch's scaled-dot-product kernels spend ≈ 10 µs per sample on
+it (blocking and dispatch built for long sequences); these loops ≈ 1 µs.
 
 Queries are either every token (``robot_only=False``) or only each sample's first token (``robot_only=True``, the
 H²INT last stage), one query row per sample in that case.
