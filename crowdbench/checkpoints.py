@@ -6,8 +6,10 @@ A checkpoint is a plain dict of tensors and built-in types, written atomically w
     {"format": "crowdbench.checkpoint/2", "method": "<name>", "crowdbench_version": "0.2.0",
      "model": {...architecture config...}, "n_max": 30, "actor": state_dict, ...}
 
-Training checkpoints add the critic, optimiser, environment and RNG state needed to resume exactly
-(:mod:`crowdbench.training.trainer`). Files of the previous H²INT format (``crowdbench.h2int/1``, crowdbench ≤ 0.2
+Training checkpoints (a run's ``last.pt``) add the critic, optimiser, environment and RNG state needed to resume
+exactly (:mod:`crowdbench.training.trainer`). Shipped checkpoints (package data, written by ``crowdbench ship``:
+:mod:`crowdbench.training.ship`) hold the weights, configuration and a ``shipped`` provenance record only, and cannot
+resume (:func:`require_resumable`). Files of the previous H²INT format (``crowdbench.h2int/1``, crowdbench ≤ 0.2
 before the training paths were consolidated) are refused with one error: no shipped checkpoint uses it any more.
 """
 
@@ -115,6 +117,23 @@ def training_budget(ckpt: dict[str, Any]) -> dict[str, int]:
     if "episodes" in ckpt:
         return {"episodes": int(ckpt["episodes"])}
     return {}
+
+
+def require_resumable(ckpt: dict[str, Any], path: str | os.PathLike, state: str = "optimizer",
+                      option: str = "--resume") -> None:
+    """Check that ``ckpt`` (read from ``path``) is a run's resumable state: it holds ``state`` (the optimiser of a
+    PPO run, the replay ``memory`` of a value run).
+
+    Raises:
+        ValueError: a shipped weights-only checkpoint, or a file without ``state`` — one line naming ``option``.
+    """
+    path = os.fspath(path)
+    if "shipped" in ckpt:
+        raise ValueError(f"{option}: {path!r}: a shipped weights-only checkpoint cannot resume; train from "
+                         "runs/…/last.pt (the run's resumable state), or start a new run from these weights")
+    if state not in ckpt:
+        raise ValueError(f"{option}: {path!r} holds a policy's weights but no training state ({state!r}); it cannot "
+                         "be resumed: resume from the run's last.pt, or start a new run")
 
 
 def save(ckpt: dict[str, Any], path: str | os.PathLike) -> str:

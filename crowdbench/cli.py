@@ -280,6 +280,14 @@ def export_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def ship_cmd(args: argparse.Namespace) -> int:
+    """A run's resumable state → the weights-only checkpoint that ships (:mod:`crowdbench.training.ship`)."""
+    from crowdbench.training.ship import ship
+
+    print(ship(args.run, args.name, method=args.method, out=args.out).line())
+    return 0
+
+
 def plot_cmd(args: argparse.Namespace) -> int:
     """Plot success trends of several `crowdbench tables` result files."""
     from crowdbench.leaderboard import plot_trends
@@ -576,6 +584,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--checkpoint", default=None, help="checkpoint (path or shipped name; default: the method's own)")
     p.add_argument("--out", default="export")
     p.set_defaults(func=export_cmd)
+    p = sub.add_parser("ship", help="write a run's weights-only checkpoint (weights, config, provenance) into the "
+                                    "method's shipped checkpoints; no optimiser, RNG, memory or history")
+    p.add_argument("run", metavar="RUN_OR_CHECKPOINT", help="run folder (its last.pt) or checkpoint file")
+    p.add_argument("--name", default=None, help="shipped name: <method's checkpoints folder>/NAME.pt, e.g. "
+                                                "METHOD-seed1 (required unless --out)")
+    p.add_argument("--method", default=None, help="the method the checkpoint must hold (default: what it holds)")
+    p.add_argument("--out", default=None, help="write this file instead of the method's folder")
+    p.set_defaults(func=ship_cmd)
     p = sub.add_parser("tables", help="the paper's Table I/II/III cells for one policy")
     p.add_argument("--policy", default=REFERENCE_METHOD, help=f"one of {POLICIES.names()}")
     p.add_argument("--checkpoint", default=None)

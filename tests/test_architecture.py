@@ -135,6 +135,7 @@ EXCEPTIONS: dict[str, set[str]] = {
     "crowdbench.predictors.training": {"policies"},  # the ORCA robot drives while the crowd is recorded
     "crowdbench.policies.recurrent_training": {"training"},  # the PPO bindings: loaded by training only
     "crowdbench.training.seeds": {"cli"},  # one run per seed is the command line, repeated
+    "crowdbench.training.ship": {"predictors"},  # shipping a trained predictor: its checkpoint folder
 }
 """Module-level exceptions to :data:`LAYERS`' rules of their unit (each with its reason); a policy method's
 ``training.py`` (its PPO binding, named by its descriptor and loaded by training only) may import training too."""

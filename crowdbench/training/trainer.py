@@ -265,13 +265,18 @@ class Trainer:
 
 
 def load_resumable(path: str, option: str = "--resume") -> dict[str, Any]:
-    """A checkpoint that today's training path can continue (clear error, naming ``option``, for weights-only
-    files)."""
+    """A checkpoint that today's training path can continue (``--resume``: a run's resumable state, not a shipped
+    weights-only file) or start from (``--init``: any PPO checkpoint with its training configuration); one clear
+    error, naming ``option``, otherwise."""
     ckpt = checkpoints.load(path)
+    if option == "--resume" and "shipped" in ckpt:
+        checkpoints.require_resumable(ckpt, path, "optimizer", option)
     if "train_config" not in ckpt:
         raise ValueError(f"{option}: {path!r} holds a policy's weights but no training state; it cannot be resumed "
                          f"(it evaluates: crowdbench evaluate {ckpt.get('method')} --checkpoint PATH). Start a new "
                          "run.")
+    if option == "--resume":
+        checkpoints.require_resumable(ckpt, path, "optimizer", option)
     return ckpt
 
 

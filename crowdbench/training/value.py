@@ -553,9 +553,7 @@ class ValueTrainer:
         from crowdbench import checkpoints
 
         ckpt = checkpoints.load(path, self.cfg.method)
-        if "memory" not in ckpt:
-            raise ValueError(f"--resume: {path!r} holds no training state (a policy file?); resume from the run's "
-                             "last.pt")
+        checkpoints.require_resumable(ckpt, path, "memory")
         saved = ValueTrainConfig.from_dict(ckpt["train_config"]).to_dict()
         mine = self.cfg.to_dict()
         diff = sorted(k for k in mine if k not in RESUMABLE and mine[k] != saved.get(k))
@@ -600,6 +598,7 @@ def resume_config(path: str, **changes: Any) -> ValueTrainConfig:
     ckpt = checkpoints.load(path)
     if ckpt.get("method") not in value_methods() or "train_config" not in ckpt:
         raise ValueError(f"--resume: {path!r} is not a CADRL/SARL training checkpoint")
+    checkpoints.require_resumable(ckpt, path, "memory")
     return dataclasses.replace(ValueTrainConfig.from_dict(ckpt["train_config"]), **changes)
 
 

@@ -181,7 +181,7 @@ def test_old_format_checkpoints_are_refused_and_weights_only_files_do_not_resume
         H2INTPolicy(checkpoint=str(old))
     ckpt = torch.load(checkpoints.shipped("h2int", "meanpool"), weights_only=True)
     weights = tmp_path / "weights.pt"
-    torch.save({k: v for k, v in ckpt.items() if k != "train_config"}, weights)
+    torch.save({k: v for k, v in ckpt.items() if k not in ("train_config", "shipped")}, weights)  # a bare weights file
     policy = H2INTPolicy(checkpoint=str(weights))
     assert policy.meta["variant"] == "meanpool"
     obs = {"robot": np.zeros((2, 9), np.float32), "humans": np.ones((2, 30, 2), np.float32),
@@ -401,3 +401,54 @@ def test_init_starts_a_new_run_from_another_runs_weights_with_its_own_noise(runs
     assert "--init, --resume: a resumed run already has its weights" in capsys.readouterr().err
     assert main(["train", "sarl", "--init", "runs/y"]) == 2
     assert "--init" in capsys.readouterr().err
+
+
+def test_ship_keeps_weights_config_and_provenance_and_the_shipped_file_acts_inits_and_exports(runs, tmp_path, capsys):
+    """`crowdbench ship RUN`: the run's weights (bit for bit), configuration, counters and provenance, without
+    optimiser, RNG, curriculum or history; it acts as its source, exports, starts a new run with `--init` exactly as
+    the run's last.pt does, and `--resume` refuses it with one error."""
+    from crowdbench.training.ship import TRAINING_STATE
+    from crowdbench.training.trainer import Trainer
+
+    root, straight, _ = runs
+    src, out = root / "straight" / "last.pt", tmp_path / "shipped.pt"
+    assert main(["ship", str(root / "straight"), "--out", str(out), "--method", "h2int"]) == 0
+    printed = capsys.readouterr().out
+    assert f"{src.stat().st_size:,} → {out.stat().st_size:,} bytes" in printed
+    assert "dropped optimizer, learning_rate, env, torch_rng, history, evals" in printed
+    full, ckpt = checkpoints.load(src, "h2int"), checkpoints.load(out, "h2int")
+    assert not set(ckpt) & set(TRAINING_STATE) and out.stat().st_size < src.stat().st_size
+    for key in ("model", "train_config", "n_max", "seed", "iteration", "env_steps", "crowd", "crowdbench_version"):
+        assert ckpt[key] == full[key], key
+    for part in ("actor", "critic"):
+        assert ckpt[part].keys() == full[part].keys()
+        for k, v in full[part].items():
+            assert torch.equal(ckpt[part][k], v) and ckpt[part][k].dtype == v.dtype, (part, k)
+    prov = ckpt["shipped"]
+    assert prov["source_sha256"] == checkpoints.file_sha256(src) and prov["source_bytes"] == src.stat().st_size
+    assert repr(prov["eval"]) == repr(full["evals"][-1]) and prov["eval"]["iteration"] == 4  # NaN-safe equality
+    assert prov["budget"] == checkpoints.training_budget(ckpt) == {"env_steps": straight.env_steps}
+    assert prov["summary"]["history_rows"] == 4 and prov["summary"]["evals"] == 2
+    assert prov["summary"]["final"]["iteration"] == 4 and prov["crowd"] == full["crowd"] is not None
+    assert prov["method"] == "h2int" and prov["seed"] == 0 and prov["counters"]["iteration"] == 4
+
+    obs = {"robot": np.linspace(-1, 1, 18, dtype=np.float32).reshape(2, 9),
+           "humans": np.linspace(-3, 3, 120, dtype=np.float32).reshape(2, 30, 2), "mask": np.ones((2, 30), np.float32)}
+    np.testing.assert_array_equal(H2INTPolicy(checkpoint=str(out)).act(obs), H2INTPolicy(checkpoint=str(src)).act(obs))
+    assert torch.jit.load(export_torchscript(str(out), str(tmp_path / "policy.pt"))) is not None
+
+    code = main(["train", "h2int", "--resume", str(out), "--out", str(tmp_path / "r"), "--iterations", "5"])
+    assert code == 2
+    assert "a shipped weights-only checkpoint cannot resume; train from runs/…/last.pt" in capsys.readouterr().err
+    from_run, from_shipped = (Trainer(tiny(), str(tmp_path / name), quiet=True) for name in ("a", "b"))
+    try:
+        from_run.warm_start(str(src))
+        from_shipped.warm_start(str(out))
+        for a, b in ((from_run.alg.actor, from_shipped.alg.actor), (from_run.alg.critic, from_shipped.alg.critic)):
+            for k, v in a.state_dict().items():
+                torch.testing.assert_close(b.state_dict()[k], v, rtol=0, atol=0)
+        assert from_shipped.cfg.init["total_env_steps"] == from_run.cfg.init["total_env_steps"] == straight.env_steps
+        assert from_shipped.cfg.init["sha256"] == checkpoints.file_sha256(out)
+    finally:
+        from_run.close()
+        from_shipped.close()
