@@ -4,14 +4,57 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 
 from crowdbench import checkpoints
+from crowdbench.cli import options
 from crowdbench.policies import trained_by
 
-NEW_RUN_ONLY = ("envs", "epochs", "mini_batches", "reward_scale", "learning_rate", "schedule")
-"""``crowdbench train`` options of a PPO run's schedule: set on a new run, refused on a resumed one (with
-``--anneal``/``--no-anneal``, ``--variant``, ``--model``)."""
+CONFIG_EXCLUDED = {
+    "method": "the positional METHOD",
+    "model": "the architecture: --variant and --model FIELD=VALUE (PPO methods)",
+    "init": "set by --init CHECKPOINT (the provenance of the weights a run starts from), not by hand",
+    "extra": "free-form notes stored with a run, not a setting",
+}
+"""Fields of the training configs with no option of their own, and why (``tests/test_cli_options.py``)."""
+CONFIG_FLAGS = {"num_envs": "envs"}
+"""Options named otherwise than their field."""
+
+
+def train_options() -> list[options.FieldOption]:
+    """The ``crowdbench train`` options of the training configs' fields: PPO's
+    :class:`~crowdbench.training.config.TrainConfig` and the value methods'
+    :class:`~crowdbench.training.value.ValueTrainConfig` (:mod:`crowdbench.cli.options`)."""
+    from crowdbench.training.config import TrainConfig
+    from crowdbench.training.value import ValueTrainConfig
+
+    return options.config_options((TrainConfig, ValueTrainConfig), exclude=tuple(CONFIG_EXCLUDED), flags=CONFIG_FLAGS,
+                                  labels={TrainConfig: "PPO", ValueTrainConfig: "value methods"})
+
+
+def _foreign(args: argparse.Namespace, cls: type, extra: tuple[str, ...] = ()) -> list[str]:
+    """The options given that set no field of ``cls`` (plus the non-field options ``extra`` that were given)."""
+    mine = {f.name for f in dataclasses.fields(cls)}
+    return [*(f"--{k}" for k in extra if getattr(args, k) is not None),
+            *(o.shown() for o in train_options() if o.field not in mine and getattr(args, o.field) is not None)]
+
+
+def _resumed(args: argparse.Namespace, resumable: tuple[str, ...]) -> dict[str, object]:
+    """The given fields a resumed run may change; one clear error for the others (``--seed`` is checked against
+    the run's own once it is read)."""
+    given = options.given(args, train_options())
+    fixed = [o.shown(given[o.field]) for o in train_options()
+             if o.field in given and o.field not in (*resumable, "seed")]
+    if fixed:
+        raise ValueError(f"{', '.join(fixed)}: a resumed run keeps its configuration; drop them with --resume "
+                         f"(only {', '.join('--' + k.replace('_', '-') for k in resumable)} may change)")
+    return {k: v for k, v in given.items() if k in resumable}
+
+
+def _check_seed(args: argparse.Namespace, seed: int) -> None:
+    if args.seed is not None and args.seed != seed:
+        raise ValueError(f"--seed {args.seed}: the resumed run's seed is {seed}; valid choices: {seed} or no --seed")
 
 
 def train_cmd(args: argparse.Namespace) -> int:
@@ -29,33 +72,23 @@ def train_cmd(args: argparse.Namespace) -> int:
     if args.algo not in PPO_METHODS.names():
         raise ValueError(f"train: unknown method {args.algo!r}; valid choices: "
                          f"{', '.join([*PPO_METHODS.names(), *value_methods])}")
-    misplaced = [f"--{k.replace('_', '-')}" for k in VALUE_ONLY if getattr(args, k) is not None]
+    misplaced = _foreign(args, TrainConfig)
     if misplaced:
         raise ValueError(f"{', '.join(misplaced)}: options of the value-based methods ({', '.join(value_methods)}), "
                          f"not of {args.algo}")
     method = PPO_METHODS.get(args.algo)()
-    speed = {name: getattr(args, name) for name in RESUMABLE if getattr(args, name) is not None}
     check_start(args.resume, args.init)  # before the resumed checkpoint is read
     if args.resume:  # a resumed run keeps its configuration; only its budget and speed settings may change
         if args.variant is not None or args.model:
             raise ValueError("--variant/--model: a resumed run keeps its architecture; drop them with --resume")
-        fixed = [f"--{k.replace('_', '-')}" for k in NEW_RUN_ONLY if getattr(args, k) is not None]
-        fixed += [] if args.anneal is None else ["--anneal" if args.anneal else "--no-anneal"]
-        if fixed:
-            raise ValueError(f"{', '.join(fixed)}: a resumed run keeps its configuration; drop them with --resume "
-                             f"(only {', '.join('--' + k.replace('_', '-') for k in RESUMABLE)} may change)")
+        speed = _resumed(args, RESUMABLE)
         path = checkpoints.run_checkpoint(args.resume)
         cfg = resume_config(path, **speed)
+        _check_seed(args, cfg.seed)
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
         model = {**method.variant_model(args.variant), **method.model_overrides(args.model or [])}
-        overrides = {"model": model, "seed": args.seed, **speed}
-        if args.anneal is not None:
-            overrides["anneal"] = args.anneal
-        for name in NEW_RUN_ONLY:
-            if getattr(args, name) is not None:
-                overrides["num_envs" if name == "envs" else name] = getattr(args, name)
-        cfg = TrainConfig.for_method(args.algo, **overrides)
+        cfg = TrainConfig.for_method(args.algo, model=model, **options.given(args, train_options()))
         out = args.out or os.path.join("runs", f"{method.label(cfg.model)}-seed{cfg.seed}")
     print(f"training {cfg.method} ({method.label(cfg.model)}) seed={cfg.seed} → {out}")
     trainer = train(cfg, out, resume=args.resume, init=args.init)
@@ -82,28 +115,23 @@ def train_seeds_cmd(args: argparse.Namespace) -> int:
     return max(codes)
 
 
-VALUE_ONLY = ("worlds", "il_episodes", "rl_episodes", "free_space", "sensing")
-
-
 def train_value_cmd(args: argparse.Namespace) -> int:
     """CADRL / SARL: imitation of the ORCA robot, then TD learning (:mod:`crowdbench.training.value`)."""
-    from crowdbench.training.value import ValueTrainConfig, resume_config, train_value
+    from crowdbench.training.value import RESUMABLE, ValueTrainConfig, resume_config, train_value
 
-    ppo_only = [f"--{k.replace('_', '-')}" for k in ("variant", "model", "init", "iterations", "until_success",
-                                                     "env_processes", *NEW_RUN_ONLY)
-                if getattr(args, k) is not None] + ([] if args.anneal is None else ["--anneal/--no-anneal"])
+    ppo_only = _foreign(args, ValueTrainConfig, extra=("variant", "model", "init"))
     if ppo_only:
         raise ValueError(f"{', '.join(ppo_only)}: options of the PPO methods, not of {args.algo}")
-    speed = {k: getattr(args, k) for k in ("minutes", "threads") if getattr(args, k) is not None}
     if args.resume:
+        speed = _resumed(args, RESUMABLE)
         path = checkpoints.run_checkpoint(args.resume)
         cfg = resume_config(path, **speed)
         if cfg.method != args.algo:
             raise ValueError(f"--resume: {path!r} is a {cfg.method} run, not {args.algo}")
+        _check_seed(args, cfg.seed)
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
-        fields = {k: getattr(args, k) for k in VALUE_ONLY if getattr(args, k) is not None}
-        cfg = ValueTrainConfig(method=args.algo, seed=args.seed, **fields, **speed)
+        cfg = ValueTrainConfig(method=args.algo, **options.given(args, train_options()))
         out = args.out or os.path.join("runs", f"{args.algo}-seed{cfg.seed}")
     print(f"training {cfg.method} seed={cfg.seed} → {out}")
     trainer = train_value(cfg, out, resume=args.resume)
@@ -124,7 +152,9 @@ def train_crowd_cmd(args: argparse.Namespace) -> int:
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """The sub-commands of this module."""
-    p = sub.add_parser("train", help="train a learned method: rsl-rl PPO or value learning (its `trainer`)")
+    p = sub.add_parser("train", help="train a learned method: rsl-rl PPO or value learning (its `trainer`)",
+                       description="Train a learned method; a resumed run (--resume) keeps its configuration but "
+                                   "for its budget and speed settings.")
     p.add_argument("algo", metavar="METHOD",
                    help=f"a method crowdbench trains: {', '.join([*trained_by('ppo'), *trained_by('value')])}")
     p.add_argument("--variant", default=None, help="a named architecture of the method (its PPO binding's variants; "
@@ -132,7 +162,6 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--model", action="append", default=None, metavar="FIELD=VALUE",
                    help="architecture field over the variant's (repeatable), e.g. --model d_model=64 --model "
                         "gru_hidden=128; the fields are the method's architecture config")
-    p.add_argument("--seed", type=int, default=0)
     p.add_argument("--seeds", default=None, metavar="S,S,...",
                    help="train several seeds, each a run of its own under OUT/seedS, in parallel processes "
                         "(--backend local) or as Ray tasks (--backend ray); equal to training them one by one")
@@ -145,40 +174,10 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--init", default=None, metavar="CHECKPOINT",
                    help="start a new run from this run's network weights (same architecture; the noise fields "
                         "action_std/learn_std, schedule, optimiser and counters are the new run's): fine-tuning")
-    p.add_argument("--iterations", type=int, default=None, help="stop after this many PPO iterations in total")
-    p.add_argument("--minutes", type=float, default=None, help="wall-clock budget in minutes")
-    p.add_argument("--until-success", type=float, default=None,
-                   help="stop once a quick evaluation (every 20 iterations: N=20, ρ=0.5) reaches this success rate")
-    p.add_argument("--envs", type=int, default=None, help="worlds stepped together (default 256)")
-    p.add_argument("--threads", type=int, default=None,
-                   help="CPU threads for the network, data-parallel over samples (default 2)")
-    p.add_argument("--env-processes", type=int, default=None,
-                   help="processes stepping the worlds (default 2; results are identical for any value)")
-    p.add_argument("--epochs", type=int, default=None,
-                   help="PPO epochs per iteration (default 4; fewer run faster but learned less per step: "
-                        "studies/crowdbench-0.2/schedule-study)")
-    p.add_argument("--mini-batches", type=int, default=None, help="PPO mini-batches per epoch (default 4)")
-    p.add_argument("--reward-scale", type=float, default=None,
-                   help="factor on the rewards PPO sees (default 0.1; 1 = the originals' unscaled rewards)")
-    p.add_argument("--learning-rate", type=float, default=None,
-                   help="initial Adam learning rate (default: the method's recipe)")
-    p.add_argument("--schedule", default=None, choices=("adaptive", "fixed"),
-                   help="learning-rate schedule: adaptive (rsl-rl's KL-target rule) or fixed (default: the "
-                        "method's recipe)")
-    p.add_argument("--anneal", action=argparse.BooleanOptionalAction, default=None,
-                   help="the responsiveness curriculum (ρ annealed from 0.8 to 0; the reference method's default) "
-                        "or, with --no-anneal, training at the final ρ = 0 from the start (the CrowdNav++ "
-                        "baselines' default, the originals' invisible robot)")
-    p.add_argument("--worlds", type=int, default=None,
-                   help="value methods: episodes run at once (default 10; same episode and update counts)")
-    p.add_argument("--il-episodes", type=int, default=None, help="value methods: ORCA demonstrations (default 3000)")
-    p.add_argument("--rl-episodes", type=int, default=None, help="value methods: TD-learning episodes (default 10000)")
-    p.add_argument("--sensing", default=None, choices=("positions", "velocities", "full"),
-                   help="value methods: sensing tier trained at (default positions: velocities estimated from "
-                        "positions)")
-    p.add_argument("--free-space", action=argparse.BooleanOptionalAction, default=None,
-                   help="value methods: value states with nobody sensed analytically (default off: it made CADRL "
-                        "worse, README)")
+    group = p.add_argument_group("training configuration", "one option per field of the PPO methods' TrainConfig "
+                                 "and the value methods' ValueTrainConfig; unset: the field's default (a PPO "
+                                 "method's recipe may set its own)")
+    options.add_options(group, train_options())
     p.set_defaults(func=train_cmd)
     p = sub.add_parser("train-crowd", help="train the learned_crowd pedestrian policy (rsl-rl PPO, every pedestrian "
                                           "a row of the batch)")
