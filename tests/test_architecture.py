@@ -117,18 +117,15 @@ LAYERS: dict[str, set[str]] = {
     "evaluation": {"config", "humans", "metrics", "policies", "robots", "worlds"},
     "training": {"__version__", "checkpoints", "cli", "config", "envs", "evaluation", "humans", "io", "policies",
                  "registry", "robots", "worlds"},
-    "leaderboard": {"__version__", "checkpoints", "evaluation", "io", "metrics", "policies", "worlds"},
-    "paper": {"io", "metrics", "policies"},
-    "panels": {"config", "io", "policies", "robots", "worlds"},
-    "bench": {"config", "envs", "humans", "io", "policies", "robots", "training", "worlds"},
-    "harness": {"__version__", "bench", "io", "leaderboard", "policies", "validate"},
-    "cli": {"bench", "checkpoints", "config", "datasets", "envs", "evaluation", "harness", "humans", "io",
-            "leaderboard", "panels", "paper", "policies", "predictors", "progress", "render", "training", "worlds"},
+    "leaderboard": {"__version__", "checkpoints", "evaluation", "io", "metrics", "policies", "validate", "worlds"},
+    "cli": {"checkpoints", "config", "datasets", "envs", "evaluation", "humans", "io", "leaderboard", "policies",
+            "predictors", "progress", "render", "robots", "training", "worlds"},
+    "bench": {"cli"},  # the public name of crowdbench.cli.bench
     "crowdbench": {"envs"},
 }
 """The allowed import graph (docs/design.md, "Layers"): the simulation (worlds, humans, robots, predictors) below
-the policies, the policies below the environments, evaluation and training, the applications (leaderboard, bench,
-harness, cli) on top."""
+the policies, the policies below the environments, evaluation and training, the leaderboard package above them and
+the applications (the cli package: commands, bench, panels) on top."""
 EXCEPTIONS: dict[str, set[str]] = {
     "crowdbench.humans.learned": {"envs", "worlds"},  # the agents' observation kernel and action map (the env's)
     "crowdbench.humans.rewards": {"worlds"},  # the compiled clearance kernel

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from crowdbench import bench, leaderboard
+from crowdbench.leaderboard import entries as _entries  # noqa: F401 - leaderboard.entries, patched below
 from crowdbench.worlds.digest import crowd_digest
 
 
@@ -27,7 +28,7 @@ def test_bench_figures_are_positive_and_formatted():
 
 
 def test_paper_grid():
-    grid = leaderboard.cells()
+    grid = leaderboard.grid()
     assert len(grid) == 3 + 3 + 9
     assert {c.rho for c in grid if c.table == "I"} == {0.7, 0.5, 0.3}
     assert {(c.humans, c.rho) for c in grid if c.table == "II"} == {(10, 0.0), (20, 0.0), (30, 0.0)}
@@ -35,7 +36,7 @@ def test_paper_grid():
 
 
 def test_tables_for_a_baseline(tmp_path):
-    res = leaderboard.evaluate_cells("orca", leaderboard.cells(("II",))[:1], episodes=4, progress=False)
+    res = leaderboard.evaluate_cells("orca", leaderboard.grid(("II",))[:1], episodes=4, progress=False)
     assert res[0]["episodes"] == 4 and res[0]["humans"] == 10
     leaderboard.save(res, str(tmp_path / "r.json"), str(tmp_path / "r.md"), {"episodes": 4})
     assert "| II | N=10 | orca |" in (tmp_path / "r.md").read_text()
@@ -142,7 +143,7 @@ def test_ablations_get_their_training_seeds_and_a_figure_with_seed_spread(tmp_pa
 
     shipped = ["h2int", "h2int-seed2", "flat", "flat-seed1", "flat-seed2", "meanpool", "standard"]
     monkeypatch.setattr(checkpoints, "shipped_names", lambda method: shipped if method == "h2int" else [])
-    monkeypatch.setattr(leaderboard, "trained_crowd", lambda path: crowd_digest())  # as if retrained
+    monkeypatch.setattr(leaderboard.entries, "trained_crowd", lambda path: crowd_digest())  # as if retrained
     entries = leaderboard.shipped_entries()
     assert entries["h2int-flat-seed1"].group == "seeds:h2int-flat"
     assert entries["h2int-flat-seed2"].policy_kwargs() == {"checkpoint": "flat-seed2"}
@@ -165,7 +166,7 @@ def test_ablations_get_their_training_seeds_and_a_figure_with_seed_spread(tmp_pa
 
 
 def test_trajectory_panels_are_drawn(tmp_path):
-    from crowdbench.panels import episode, plot
+    from crowdbench.cli.panels import episode, plot
     from crowdbench.policies import make_policy
 
     ep = episode(make_policy("orca"), "intersection", 6, seed=1, responsiveness=0.5)

@@ -2,7 +2,7 @@
 H²INT the float rounding of its batched encoder (different kernels for different row counts) makes trajectories
 batch-dependent, so its outcomes are compared within a tolerance. Leaderboard cells fix the batch size (``worlds`` in
 the suite and the fingerprint), so published tables are bitwise reproducible; worker counts and backends never
-matter (tests/test_harness.py)."""
+matter (tests/test_leaderboard.py)."""
 
 from __future__ import annotations
 

@@ -180,12 +180,12 @@ def toml_value(v) -> str | None:
 @FUZZ
 @given(kwargs_from(SUITE_KEYS))
 def test_suite_files(tmp_path_factory, kwargs):
-    from crowdbench import harness
+    from crowdbench import leaderboard
 
     lines = [f"{k} = {toml_value(v)}" for k, v in kwargs.items() if toml_value(v) is not None]
     path = tmp_path_factory.mktemp("suite") / "s.toml"
     path.write_text("\n".join(lines) + "\n")
-    answer("suite file", lambda: harness.load_suite(str(path)).grid(), kwargs, ("suite",))
+    answer("suite file", lambda: leaderboard.load_suite(str(path)).grid(), kwargs, ("suite",))
 
 
 CLI_JUNK = st.sampled_from(["-1", "0", "x", "nan", "1e9", "", "2.5", "--", "inf"])

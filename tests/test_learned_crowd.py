@@ -59,7 +59,7 @@ def test_crowd_stats_counts_arrivals_and_no_contacts_for_orca():
 
 def test_table_five_is_the_crowd_model_shift():
     from crowdbench import leaderboard
-    from crowdbench.harness import load_suite
+    from crowdbench.leaderboard import load_suite
 
     grid = load_suite("shift").grid()
     assert [c.model for c in grid] == ["responsive_orca", "orca", "social_force", "learned_crowd"]

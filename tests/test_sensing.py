@@ -118,7 +118,7 @@ def _cell(rate: float, episodes: int = 100, check: float | None = None) -> dict:
 
 
 def test_the_paper_report_pools_table_three_and_flags_disagreeing_ranges(tmp_path):
-    from crowdbench import paper
+    from crowdbench.leaderboard import paper
 
     folder = tmp_path / "cells" / "orca"
     folder.mkdir(parents=True)

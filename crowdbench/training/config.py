@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 from crowdbench.policies import REFERENCE_METHOD
 from crowdbench.training.methods import PPO_METHODS
@@ -36,7 +36,8 @@ class TrainConfig:
     iterations: int = 600
     """Upper bound on PPO iterations (counted from the start of the run, across resumes)."""
     minutes: float = 0.0
-    """Wall-clock budget in minutes (0 = none); training stops after the iteration that exceeds it."""
+    """The run's total wall-clock budget in minutes, a resumed run counting its earlier minutes (0 = none).
+    Training stops after the iteration that exceeds it."""
     humans_range: tuple[int, int] = (10, 30)
     """Pedestrians per training episode, drawn uniformly (covers the 10–30 of the paper's Table II)."""
     anneal: bool = True
@@ -53,7 +54,7 @@ class TrainConfig:
     """Episodes in the curriculum's success window (and its cooldown)."""
     learning_rate: float = 3e-4
     """Initial Adam learning rate (then adapted to the KL target with ``schedule="adaptive"``)."""
-    schedule: str = "adaptive"
+    schedule: Literal["adaptive", "fixed"] = "adaptive"
     """Learning-rate schedule: ``adaptive`` (rsl-rl's KL-target rule) or ``fixed``."""
     epochs: int = 4
     """PPO epochs per iteration."""

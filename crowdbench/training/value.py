@@ -29,7 +29,7 @@ import sys
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -166,10 +166,11 @@ class ValueTrainConfig:
     eval_episodes: int = 100
     """Episodes per quick evaluation."""
     minutes: float = 0.0
-    """Wall-clock budget (0 = none); the run stops at the first round boundary past it."""
+    """The run's total wall-clock budget in minutes, a resumed run counting its earlier minutes (0 = none). The
+    run stops at the first round boundary past it."""
     threads: int = 1
     """torch threads."""
-    sensing: str = "positions"
+    sensing: Literal["positions", "velocities", "full"] = "positions"
     """Sensing tier the value network trains and acts at (``positions``: velocities estimated from positions;
     ``velocities``: true velocities and radii), the ORCA demonstrator's included."""
     free_space: bool = False

@@ -1,108 +1,23 @@
-"""The paper's evaluation grid, regenerated for any registered robot policy.
-
-Cells (500 episodes each by default, latent-responsive ORCA pedestrians, δ = 0.2):
-
-* Table I — circle crossing, 20 pedestrians, ρ ∈ {0.7 High, 0.5 Medium, 0.3 Low};
-* Table II — circle crossing, ρ = 0 (non-responsive regime), N ∈ {10, 20, 30};
-* Table III — unseen layouts (intersection, split flow, random wander), 30 pedestrians, ρ ∈ {0.7, 0.5, 0.3};
-* Table IV — real crowds: the five ETH/UCY scenes, recorded people replayed blind to the robot (``replay``) or
-  avoiding it and rejoining their paths (``reactive_replay``), slots for the scene's peak crowd;
-* Table V — crowd-model shift: circle crossing, 20 pedestrians of each model of :data:`SHIFT_MODELS` (every
-  method was trained among latent-responsive ORCA pedestrians).
-
-Each cell uses evaluation seed S (episode k ↔ world seed S + k), so every policy meets exactly the same crowds.
-"""
+"""The report: the stored cells as tables — each entry's ``OUT/<slug>.json|md``, ``OUT/LEADERBOARD.md`` (the paper's
+tables with one row per method) and the figures (:mod:`crowdbench.leaderboard.figures`). The comparison with the
+paper's published numbers is :mod:`crowdbench.leaderboard.paper`."""
 
 from __future__ import annotations
 
-import functools
 import json
 import math
-import time
-from dataclasses import dataclass
+import os
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
-from crowdbench import __version__, checkpoints
-from crowdbench.evaluation import run_episodes, summarize
-from crowdbench.io import atomic_path, write_text
+from crowdbench import checkpoints
+from crowdbench.io import write_text
+from crowdbench.leaderboard.cells import cell_key, suite_digest
+from crowdbench.leaderboard.entries import STALE, Entry, method_entries
+from crowdbench.leaderboard.figures import plot_board
+from crowdbench.leaderboard.suite import REGIMES, TABLES, Suite
 from crowdbench.metrics import wilson
-from crowdbench.policies import POLICIES, REFERENCE_METHOD, make_policy, methods
-from crowdbench.worlds.digest import crowd_digest
-
-REGIMES = {"High": 0.7, "Medium": 0.5, "Low": 0.3}
-
-
-TABLES = ("I", "II", "III", "IV", "V")
-SHIFT_MODELS = ("responsive_orca", "orca", "social_force", "learned_crowd")
-"""Table V's crowds: the training crowd (latent-responsive ORCA, ρ = 0.5) and three others."""
-
-
-@dataclass(frozen=True)
-class Cell:
-    """One evaluation setting: table, row label, layout, crowd size, mean responsiveness ρ and pedestrian model."""
-
-    table: str
-    row: str
-    layout: str
-    humans: int
-    rho: float
-    model: str = "responsive_orca"
-
-
-def cells(tables: tuple[str, ...] = ("I", "II", "III")) -> list[Cell]:
-    """The grid of the requested tables."""
-    from crowdbench.worlds.recorded import PEAK
-
-    out: list[Cell] = []
-    if "I" in tables:
-        out += [Cell("I", name, "circle_crossing", 20, rho) for name, rho in REGIMES.items()]
-    if "II" in tables:
-        out += [Cell("II", f"N={n}", "circle_crossing", n, 0.0) for n in (10, 20, 30)]
-    if "III" in tables:
-        out += [Cell("III", f"{lay} {name}", lay, 30, rho) for lay in ("intersection", "split_flow", "random_wander")
-                for name, rho in REGIMES.items()]
-    if "V" in tables:
-        out += [Cell("V", m if m != "responsive_orca" else "responsive_orca ρ=0.5", "circle_crossing", 20,
-                     0.5 if m == "responsive_orca" else 0.0, m) for m in SHIFT_MODELS]
-    if "IV" in tables:
-        out += [Cell("IV", f"{scene} {model}", scene, peak, 0.0, model) for scene, peak in PEAK.items()
-                for model in ("replay", "reactive_replay")]
-    return out
-
-
-def evaluate_cells(policy_name: str, grid: list[Cell], episodes: int = 500, seed: int = 0, num_worlds: int = 100,
-                   policy_kwargs: dict | None = None, progress: bool = True, label: str | None = None,
-                   layout_kwargs: dict | None = None, model_kwargs: dict | None = None,
-                   world_options: dict | None = None, counterfactual: bool = True) -> list[dict[str, Any]]:
-    """Run every cell for one policy; returns one summary dict per cell (``policy`` = ``label`` or the name; the
-    metrics of :func:`crowdbench.metrics.summarize`). ``layout_kwargs``, ``model_kwargs`` (latent-responsive ORCA) and
-    ``world_options`` (:class:`WorldConfig` fields) change the scenario from its defaults (studies do);
-    ``counterfactual`` runs the robot-absent twin for the pedestrians' delay."""
-    from crowdbench.worlds import make_layout
-
-    results = []
-    t_start = time.time()
-    for k, c in enumerate(grid, 1):
-        t = time.time()
-        policy = make_policy(policy_name, **(policy_kwargs or {}))
-        kwargs = {"responsiveness": c.rho, **(model_kwargs or {})} if c.model == "responsive_orca" else {}
-        eps = run_episodes(policy, episodes, seed=seed, num_worlds=num_worlds,
-                           layout=make_layout(c.layout, **(layout_kwargs or {})), num_humans=c.humans,
-                           human_model=c.model, human_model_kwargs=kwargs,
-                           counterfactual=counterfactual, **(world_options or {}))
-        s = summarize(eps)
-        results.append({"policy": label or policy_name, "table": c.table, "row": c.row, "layout": c.layout,
-                        "humans": c.humans, "responsiveness": c.rho, "human_model": c.model, "seed": seed, **s,
-                        "wall_s": round(time.time() - t, 1)})
-        if progress:
-            eta = (time.time() - t_start) / k * (len(grid) - k)
-            print(f"[{k}/{len(grid)}] Table {c.table:<3} {c.row:<26} success {s['success_rate']:.3f} collision "
-                  f"{s['collision_rate']:.3f} timeout {s['timeout_rate']:.3f} time {s['nav_time']:.2f} path "
-                  f"{s['path_length']:.2f} dv {s['delta_v']:.2f} | ETA {eta / 60:.1f} min", flush=True)
-    return results
+from crowdbench.policies import REFERENCE_METHOD
 
 
 def with_pooled(results: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -174,262 +89,6 @@ def save(results: list[dict[str, Any]], json_path: str | None, md_path: str | No
         write_text(json_path, json.dumps({"meta": meta, "results": results}, indent=2) + "\n")
     if md_path:
         write_text(md_path, markdown(results))
-
-
-def legend_label(label: str, n_seeds: int, trained: bool = True) -> str:
-    """A figure's legend entry: a learned method names its training-seed count, a planner (nothing trained) none."""
-    return f"{label} ({n_seeds} seed{'s' if n_seeds > 1 else ''})" if trained else label
-
-
-def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[str, str] | None = None,
-               rows: str = "main", reference: str = REFERENCE_METHOD, planners: frozenset[str] = frozenset()) -> None:
-    """Success against the response regime ρ (Table I, N = 20) and against crowd size N (Table II, ρ = 0), one line
-    per method of group ``rows`` (``main``; or ``ablation``, headed by ``reference``: the paper's ablation figure).
-    A method with several training seeds (entries of group ``seeds:<label>``) is drawn at the seeds' mean, with error
-    bars from the lowest to the highest seed and a band enveloping the seeds' Wilson 95 % intervals; one seed: its
-    interval. The legend gives each learned method's seed count; ``planners`` (labels with no checkpoint) get none."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-
-    groups = groups or {}
-    fig, axes = plt.subplots(1, 2, figsize=(10, 3.8), dpi=100, sharey=True)
-    specs = (("I", "responsiveness", "mean responsiveness ρ (Table I, N = 20)"),
-             ("II", "humans", "pedestrians N (Table II, ρ = 0)"))
-    heads = [lb for lb in board if groups.get(lb, "main") == rows]
-    if rows != "main" and reference in board and reference not in heads:
-        heads.insert(0, reference)
-    for ax, (table, key, xlabel) in zip(axes, specs, strict=True):
-        for label in heads:
-            family = [label] + [lb for lb, g in groups.items() if g == f"seeds:{label}" and lb in board]
-            pts: dict[float, list[tuple[float, float, float]]] = {}
-            for lb in family:
-                for r in board[lb]:
-                    if r["table"] == table and "error" not in r:
-                        lo, hi = r.get("ci", {}).get("success_rate", (r["success_rate"],) * 2)
-                        pts.setdefault(r[key], []).append((r["success_rate"], lo, hi))
-            if not pts:
-                continue
-            xs = sorted(pts)
-            mean = [100 * np.mean([p[0] for p in pts[x]]) for x in xs]
-            lo = [100 * min(p[1] for p in pts[x]) for x in xs]
-            hi = [100 * max(p[2] for p in pts[x]) for x in xs]
-            n_seeds = len(family)
-            (line,) = ax.plot(xs, mean, "o-", label=legend_label(label, n_seeds, label not in planners))
-            ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
-            if n_seeds > 1:
-                low = [100 * min(p[0] for p in pts[x]) for x in xs]
-                high = [100 * max(p[0] for p in pts[x]) for x in xs]
-                ax.errorbar(xs, mean, yerr=[np.subtract(mean, low), np.subtract(high, mean)], fmt="none",
-                            ecolor=line.get_color(), capsize=3)
-        ticks = sorted({r[key] for rows in board.values() for r in rows if r["table"] == table})
-        ax.set_xticks(ticks)
-        ax.set_xlabel(xlabel)
-        ax.grid(alpha=0.3)
-    axes[0].set_ylabel("success rate [%] (band: 95 % interval;\nbars: seed range)")
-    axes[0].invert_xaxis()  # harder to the right: less responsive
-    axes[1].legend(fontsize=8, loc="lower left")
-    fig.tight_layout()
-    with atomic_path(path, suffix=".png") as tmp:
-        fig.savefig(tmp, format="png")
-    plt.close(fig)
-
-
-def plot_trends(result_files: list[str], path: str) -> None:
-    """Success rate per policy across Table I regimes and Table II crowd sizes (the paper's ablation figure)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-
-    fig, axes = plt.subplots(1, 2, figsize=(9, 3.6), dpi=100, sharey=True)
-    for f in result_files:
-        with open(f) as fh:
-            res = json.load(fh)["results"]
-        name = res[0]["policy"]
-        for ax, table in zip(axes, ("I", "II"), strict=True):
-            rows = [r for r in res if r["table"] == table]
-            ax.plot([r["row"] for r in rows], [100 * r["success_rate"] for r in rows], "o-", label=name)
-    axes[0].set(title="Table I: response regime (N = 20)", ylabel="success rate [%]")
-    axes[1].set(title="Table II: crowd size (ρ = 0)")
-    for ax in axes:
-        ax.grid(alpha=0.3)
-    axes[1].legend(fontsize=8)
-    fig.tight_layout()
-    with atomic_path(path, suffix=".png") as tmp:
-        fig.savefig(tmp, format="png")
-    plt.close(fig)
-
-
-# ---------------------------------------------------------------------------------------------------- leaderboard
-@dataclass(frozen=True)
-class Entry:
-    """One leaderboard row: a display label, a registered robot policy and its keyword arguments."""
-
-    label: str
-    policy: str
-    kwargs: tuple[tuple[str, Any], ...] = ()
-    group: str = "main"
-    """``main`` (the methods compared in Tables I–III), ``seeds:LABEL`` (other training seeds of the main entry
-    ``LABEL``; plain ``seeds`` = of the reference method) or ``ablation`` (its variants)."""
-
-    @property
-    def slug(self) -> str:
-        """File stem of this entry's results in the leaderboard folder."""
-        return "".join(ch if ch.isalnum() or ch in "-_" else "-" for ch in self.label.lower()).strip("-")
-
-    def policy_kwargs(self) -> dict[str, Any]:
-        return dict(self.kwargs)
-
-
-def method_entries() -> tuple[Entry, ...]:
-    """Every registered method's leaderboard rows (:attr:`crowdbench.policies.Method.entries`), the main rows
-    first, each group in registration order."""
-    rows = [Entry(e.label, m.name, e.kwargs, e.group) for m in methods() for e in m.entries]
-    return tuple(sorted(rows, key=lambda e: e.group != "main"))  # stable
-
-
-METHODS: tuple[Entry, ...] = method_entries()
-"""The leaderboard's methods (those registered when this module is imported; :func:`method_entries` for a later
-registration); a learned one appears once a checkpoint trained on the current crowd ships. Rows at another sensing
-tier than ``positions`` (the ``sensing`` argument) get their own section of the board."""
-
-
-def trained_crowd(path: str) -> str | None:
-    """The crowd digest (:func:`~crowdbench.worlds.digest.crowd_digest`) a checkpoint records it was trained on;
-    None for checkpoints that do not say (trained before crowds were recorded)."""
-    return _trained_crowd(path, checkpoints.file_sha256(path))
-
-
-@functools.lru_cache(maxsize=256)
-def _trained_crowd(path: str, sha256: str) -> str | None:
-    import torch
-
-    ckpt = torch.load(path, map_location="cpu", weights_only=True)
-    return ckpt.get("crowd") if isinstance(ckpt, dict) else None
-
-
-STALE: dict[str, str] = {}
-"""Shipped learned entries left off the board (label → why): their checkpoint was trained on another crowd."""
-
-
-def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
-    """``methods`` whose checkpoint is shipped and was trained on the current crowd (a learned method appears once
-    such a checkpoint lands; the others are listed in :data:`STALE`), each main or ablation entry followed by its
-    other shipped training seeds (checkpoints ``<name>-seed<k>``, group ``seeds:<label>``)."""
-    import re
-
-
-    out: dict[str, Entry] = {}
-    current = crowd_digest()
-    for e in methods:
-        ckpt = e.policy_kwargs().get("checkpoint")
-        names = checkpoints.shipped_names(e.policy) if ckpt else []
-        if ckpt and ckpt not in names:
-            continue
-        if ckpt and trained_crowd(checkpoints.resolve(e.policy, ckpt)) != current:
-            STALE[e.label] = ("trained on crowdbench's former crowd, not on the current CrowdNav++ one; back once "
-                              "retrained (`crowdbench train`)")
-            continue
-        out[e.slug] = e
-        if e.group in ("main", "ablation") and ckpt:
-            seeds = sorted((int(m[1]), n) for n in names if (m := re.fullmatch(rf"{re.escape(ckpt)}-seed(\d+)", n)))
-            for k, name in seeds:
-                if trained_crowd(checkpoints.resolve(e.policy, name)) != current:
-                    continue
-                seed_entry = Entry(f"{e.label}-seed{k}", e.policy, (("checkpoint", name),), f"seeds:{e.label}")
-                out[seed_entry.slug] = seed_entry
-    return out
-
-
-ENTRIES: dict[str, Entry] = shipped_entries()
-"""The shipped leaderboard's rows (of the methods registered at import; :func:`board_entries` for the current)."""
-
-
-def board_entries() -> dict[str, Entry]:
-    """The shipped leaderboard's rows of every method registered now (plug-ins registered after this module was
-    imported included)."""
-    return shipped_entries(method_entries())
-
-
-def parse_entry(spec: str) -> Entry:
-    """``LABEL=POLICY`` or ``LABEL=POLICY@CHECKPOINT`` (a policy registered in :data:`~crowdbench.policies.POLICIES`,
-    e.g. through the ``crowdbench.policies`` entry point) → :class:`Entry`."""
-    if "=" not in spec:
-        raise ValueError(f"--add {spec!r}: expected LABEL=POLICY or LABEL=POLICY@CHECKPOINT")
-    label, rest = (s.strip() for s in spec.split("=", 1))
-    policy, _, ckpt = rest.partition("@")
-    if policy not in POLICIES.names():
-        raise ValueError(f"--add {spec!r}: unknown policy {policy!r}; valid choices: {', '.join(POLICIES.names())}")
-    return Entry(label, policy, (("checkpoint", ckpt),) if ckpt else ())
-
-
-def scenario_digest(tables: tuple[str, ...] = ("I", "II", "III")) -> str:
-    """SHA-256 (16 hex digits) of everything that defines the crowds of the grid (:func:`~crowdbench.worlds.digest.
-    crowd_digest` over its layouts and pedestrian models) — a cached result is stale when the scenario changes."""
-    grid = cells(tables)
-    return crowd_digest(tuple(sorted({c.layout for c in grid})), tuple(sorted({c.model for c in grid})))
-
-
-def policy_code(policy: str) -> str:
-    """SHA-256 (16 hex digits) of the source a registered robot policy runs: the file defining its class and every
-    base class (outside the standard library and torch), plus every ``.py`` file of a method sub-package
-    (``crowdbench/policies/<method>/``) among them — a plug-in's own files included. A stored cell is stale once
-    any of them changes."""
-    import hashlib
-    import inspect
-
-
-    factory = POLICIES.get(policy)
-    files: set[Path] = set()
-    for cls in inspect.getmro(factory) if inspect.isclass(factory) else (factory,):
-        if getattr(cls, "__module__", "").split(".")[0] in ("builtins", "abc", "typing", "torch", "collections"):
-            continue
-        try:
-            src = inspect.getsourcefile(cls)
-        except TypeError:
-            continue
-        if src is None:
-            continue
-        path = Path(src).resolve()
-        files.add(path)
-        pkg = Path(__file__).resolve().parent / "policies"
-        if path.parent.parent == pkg:  # a method sub-package: all of it
-            files.update(path.parent.glob("*.py"))
-    h = hashlib.sha256()
-    for path in sorted(files):
-        h.update(path.name.encode())
-        h.update(path.read_bytes())
-    return h.hexdigest()[:16]
-
-
-def entry_sensing(entry: Entry) -> str:
-    """The sensing tier of an entry's policy (built with its arguments: a checkpoint may set it)."""
-    return make_policy(entry.policy, **entry.policy_kwargs()).sensing
-
-
-def _fingerprint(entry: Entry, episodes: int, seed: int) -> dict[str, Any]:
-    """What a cached result must match to be reused: policy, arguments, sensing tier, checkpoint contents, the
-    policy's source (:func:`policy_code`), the crowdbench version, episodes, seed, and the scenario
-    (:func:`scenario_digest`)."""
-    import os
-
-
-    kwargs = entry.policy_kwargs()
-    digest = None
-    ckpt = kwargs.get("checkpoint")
-    if ckpt:
-        ckpt = checkpoints.resolve(entry.policy, ckpt)  # a path, or the name of a shipped checkpoint
-    if ckpt and os.path.exists(ckpt):
-        digest = checkpoints.file_sha256(ckpt)
-    shown = {k: (v if k != "checkpoint" or not os.path.exists(v) else os.path.relpath(v)) for k, v in kwargs.items()}
-
-    return {"policy": entry.policy, "kwargs": shown, "sensing": entry_sensing(entry), "checkpoint_sha256": digest,
-            "code": policy_code(entry.policy), "crowdbench": __version__, "episodes": episodes, "seed": seed,
-            "scenario": scenario_digest()}
 
 
 TABLE_TITLES = {"I": "Table I — response regimes (circle crossing, N = 20)",
@@ -633,3 +292,82 @@ def _over_seeds(board: dict[str, list[dict[str, Any]]], families: dict[str, list
             cells_.insert(0, "—" if lb in planners else _budget_cell([budgets.get(x, {}) for x in fam]))
         out.append(f"| {lb} | {'—' if lb in planners else len(fam)} | " + " | ".join(cells_) + " |")
     return [*out, ""]
+
+
+# ---------------------------------------------------------------------------------------------------- the board
+def write_board(out: str, suite: Suite, entries: list[Entry], outcomes: dict[tuple[str, str], dict[str, Any]],
+                fps: dict[str, dict[str, Any]], info: dict[str, Any]) -> dict[str, list[dict[str, Any]]]:
+    """Write each entry's ``OUT/<slug>.json|md`` (results, fingerprint, provenance ``info``, wall time) from the
+    cells' ``outcomes`` (``(label, cell key) → stored outcome``), ``OUT/LEADERBOARD.md`` and the figures
+    (``success.png``; ``ablation.png`` when ablations are on the board); returns the result rows by label (an
+    errored cell is a row with ``error``)."""
+    grid = suite.grid()
+    board: dict[str, list[dict[str, Any]]] = {}
+    for e in entries:
+        rows = []
+        for c in grid:
+            o = outcomes[(e.label, cell_key(c))]
+            rows.append(o["result"] if "result" in o else
+                        {"policy": e.label, "table": c.table, "row": c.row, "layout": c.layout, "humans": c.humans,
+                         "responsiveness": c.rho, "seed": suite.seed, "error": o["error"]})
+        board[e.label] = rows
+        checks = [outcomes[(e.label, cell_key(c))].get("check") for c in grid]
+        cpus = sorted({outcomes[(e.label, cell_key(c))].get("cpu") or "unrecorded" for c in grid})
+        meta = {"fingerprint": fps[e.label], "label": e.label, "group": e.group, "suite": suite.to_dict(),
+                "suite_digest": suite_digest(suite), "episodes": suite.episodes, "seed": suite.seed,
+                "wall_s": round(sum(r.get("wall_s", 0.0) for r in rows), 1),
+                "provenance": {**info, "cell_cpus": cpus}}
+        doc: dict[str, Any] = {"meta": meta, "results": rows}
+        if any(checks):
+            doc["checks"] = [c for c in checks if c]
+        write_text(os.path.join(out, f"{e.slug}.json"), json.dumps(doc, indent=2) + "\n")
+        write_text(os.path.join(out, f"{e.slug}.md"), markdown(rows))
+    everyone, groups, planners, every_fp = gather(out, suite, board, {e.label: e.group for e in entries},
+                                                  {e.label: fps[e.label] for e in entries}, only=True)
+
+    write_text(os.path.join(out, "LEADERBOARD.md"),
+               leaderboard_markdown(everyone, groups, suite.episodes, suite.seed, suite=suite.name,
+                                    planners=planners, budgets=training_budgets(every_fp),
+                                    sensing={lb: fp.get("sensing", "positions") for lb, fp in every_fp.items()},
+                                    missing={lb: why for lb, why in STALE.items() if lb not in everyone}))
+    if {"I", "II"} & set(suite.tables):
+        plot_board(everyone, os.path.join(out, "success.png"), groups, planners=planners)
+        if "ablation" in groups.values():
+            plot_board(everyone, os.path.join(out, "ablation.png"), groups, rows="ablation", planners=planners)
+    return board
+
+
+
+
+def gather(out: str, suite: Suite, board: dict[str, list[dict[str, Any]]], groups: dict[str, str],
+           fingerprints: dict[str, dict[str, Any]], only: bool = False
+           ) -> tuple[dict[str, list[dict[str, Any]]], dict[str, str], frozenset[str], dict[str, dict[str, Any]]]:
+    """The run's ``board`` plus (unless ``only``: ``LEADERBOARD.md`` shows the methods asked for) every other method
+    file in ``out`` scored on the same suite (same digest); in leaderboard order
+    (:data:`~crowdbench.leaderboard.entries.METHODS`, each method's other training seeds after it, then the rest by
+    label). Returns rows, groups, the planners (labels whose fingerprint has no checkpoint) and every label's
+    fingerprint (``fingerprints`` for the run's entries, the stored one otherwise)."""
+    rows, groups, fingerprints = {}, dict(groups), dict(fingerprints)
+    for path in sorted(Path(out).glob("*.json")):
+        try:
+            d = json.loads(path.read_text())
+        except (OSError, ValueError):
+            continue
+        meta = d.get("meta") if isinstance(d, dict) else None
+        if only and isinstance(meta, dict) and meta.get("label") not in board:
+            continue
+        if isinstance(meta, dict) and meta.get("suite_digest") == suite_digest(suite) and "label" in meta:
+            rows[meta["label"]] = d["results"]
+            groups.setdefault(meta["label"], meta.get("group", "main"))
+            fingerprints.setdefault(meta["label"], meta.get("fingerprint") or {})
+    rows.update(board)
+    order = [m.label for m in method_entries()]
+
+    def key(label: str) -> tuple[int, int, str]:
+        group = groups.get(label, "main")
+        base = (group.split(":", 1)[1] if ":" in group else REFERENCE_METHOD) if group.startswith("seeds") else label
+        return (order.index(base) if base in order else len(order), base != label, label)
+
+    planners = frozenset(lb for lb in rows if not fingerprints.get(lb, {}).get("checkpoint_sha256"))
+    return {lb: rows[lb] for lb in sorted(rows, key=key)}, groups, planners, fingerprints
+

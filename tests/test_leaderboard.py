@@ -1,5 +1,5 @@
-"""Leaderboard harness: suites, stored cells reused, faults isolated per cell, kill-and-resume, workers and backends
-give identical results."""
+"""The leaderboard (:mod:`crowdbench.leaderboard`): suites, stored cells reused, faults isolated per cell,
+kill-and-resume, workers and backends give identical results."""
 
 from __future__ import annotations
 
@@ -13,15 +13,16 @@ import time
 import numpy as np
 import pytest
 
-from crowdbench import harness, leaderboard
+from crowdbench import leaderboard
 from crowdbench.humans import HUMAN_MODELS
+from crowdbench.leaderboard import run as runner
 from crowdbench.policies import POLICIES, RobotPolicy
 
 
-def suite(**kw) -> harness.Suite:
+def suite(**kw) -> leaderboard.Suite:
     base = dict(name="t", episodes=4, tables=("II",), worlds=4, counterfactual=False)
     base.update(kw)
-    return harness.Suite(**base)
+    return leaderboard.Suite(**base)
 
 
 def stable(path) -> dict:
@@ -60,16 +61,16 @@ def users_policies():
 
 
 def test_shipped_suites_load_and_bad_suites_are_one_clear_error(tmp_path):
-    paper = harness.load_suite("paper")
+    paper = leaderboard.load_suite("paper")
     assert paper.episodes == 500 and len(paper.grid()) == 25 and paper.counterfactual  # Tables I–III and IV
     assert paper.check_seed == 100000
-    assert harness.load_suite("quick", episodes=7).episodes == 7
+    assert leaderboard.load_suite("quick", episodes=7).episodes == 7
     bad = tmp_path / "bad.toml"
     bad.write_text('episodes = 5\ntabels = ["I"]\n')
     with pytest.raises(ValueError, match=r"unknown keys \['tabels'\]; valid choices"):
-        harness.load_suite(str(bad))
+        leaderboard.load_suite(str(bad))
     with pytest.raises(ValueError, match="valid choices: paper, quick, shift"):
-        harness.load_suite("nope")
+        leaderboard.load_suite("nope")
     with pytest.raises(ValueError, match="tables"):
         suite(tables=("VI",))
     with pytest.raises(ValueError, match="rows"):
@@ -80,7 +81,7 @@ def test_shipped_suites_load_and_bad_suites_are_one_clear_error(tmp_path):
 def test_cells_are_stored_reused_and_faults_stay_in_their_cell(tmp_path, users_policies, monkeypatch):
     entries = [leaderboard.ENTRIES["orca"], leaderboard.parse_entry("Standing still=still_for_test"),
                leaderboard.parse_entry("flaky=flaky_for_test")]
-    board = harness.run(suite(), entries, str(tmp_path))
+    board = leaderboard.run_suite(suite(), entries, str(tmp_path))
     assert [r["success_rate"] for r in board["Standing still"]] == [0.0] * 3  # never reaches the goal
     flaky = {r["row"]: r for r in board["flaky"]}
     assert flaky["N=10"]["success_rate"] == 0.0  # the healthy cell completed
@@ -90,7 +91,7 @@ def test_cells_are_stored_reused_and_faults_stay_in_their_cell(tmp_path, users_p
     assert "| flaky |" in md and "error" in md and "| Standing still |" in md
     assert len(list((tmp_path / "cells").rglob("*.json"))) == 9
     meta = json.loads((tmp_path / "orca.json").read_text())["meta"]
-    assert meta["provenance"]["packages"]["numpy"] and meta["suite_digest"] == suite().digest()
+    assert meta["provenance"]["packages"]["numpy"] and meta["suite_digest"] == leaderboard.suite_digest(suite())
     from crowdbench.bench import cpu_model
 
     cpu = cpu_model()
@@ -99,27 +100,27 @@ def test_cells_are_stored_reused_and_faults_stay_in_their_cell(tmp_path, users_p
     assert json.loads(cell_file.read_text())["cpu"] == cpu  # each cell names the CPU it ran on
 
     calls = []
-    real = harness.run_cell
-    monkeypatch.setattr(harness, "run_cell", lambda *a: calls.append(a[1].row) or real(*a))
-    again = harness.run(suite(), entries, str(tmp_path))
+    real = leaderboard.run_cell
+    monkeypatch.setattr(runner, "run_cell", lambda *a: calls.append(a[1].row) or real(*a))
+    again = leaderboard.run_suite(suite(), entries, str(tmp_path))
     assert sorted(calls) == ["N=20", "N=30"]  # only the failed cells are retried
     assert json.dumps(again["orca"]) == json.dumps(board["orca"])
     saved = json.loads(cell_file.read_text())
     saved.pop("cpu")  # a cell stored before CPUs were recorded is reused and marked as such
     cell_file.write_text(json.dumps(saved))
-    harness.run(suite(), entries[:1], str(tmp_path))
+    leaderboard.run_suite(suite(), entries[:1], str(tmp_path))
     meta = json.loads((tmp_path / "orca.json").read_text())["meta"]
     assert meta["provenance"]["cell_cpus"] == sorted([cpu, "unrecorded"])
     calls.clear()
-    harness.run(suite(episodes=5), entries[:1], str(tmp_path))
+    leaderboard.run_suite(suite(episodes=5), entries[:1], str(tmp_path))
     assert len(calls) == 3  # another budget is another fingerprint
 
 
 def test_figure_legends_give_seed_counts_to_learned_methods_only(tmp_path):
     entries = [leaderboard.ENTRIES["orca"], leaderboard.Entry("h2int", "h2int", (("checkpoint", "h2int"),))]
-    harness.run(suite(rows=("II/N=10",)), entries, str(tmp_path))
-    fps = {"h2int": harness.fingerprint(entries[1], suite(rows=("II/N=10",)))}
-    rows, groups, planners, _ = harness.gather(str(tmp_path), suite(rows=("II/N=10",)), {}, {}, fps)
+    leaderboard.run_suite(suite(rows=("II/N=10",)), entries, str(tmp_path))
+    fps = {"h2int": leaderboard.fingerprint(entries[1], suite(rows=("II/N=10",)))}
+    rows, groups, planners, _ = leaderboard.gather(str(tmp_path), suite(rows=("II/N=10",)), {}, {}, fps)
     assert list(rows) == ["orca", "h2int"] and planners == {"orca"}  # orca's from its stored file
     assert leaderboard.legend_label("orca", 1, trained=False) == "orca"
     assert leaderboard.legend_label("h2int", 1) == "h2int (1 seed)"
@@ -139,18 +140,18 @@ def test_a_failing_pedestrian_model_is_reported_by_name(tmp_path, monkeypatch):
 
 def test_workers_give_identical_files(tmp_path):
     entries = [leaderboard.ENTRIES["orca"], leaderboard.ENTRIES["social_force"]]
-    harness.run(suite(), entries, str(tmp_path / "one"))
-    harness.run(suite(), entries, str(tmp_path / "two"), workers=2)
+    leaderboard.run_suite(suite(), entries, str(tmp_path / "one"))
+    leaderboard.run_suite(suite(), entries, str(tmp_path / "two"), workers=2)
     for name in ("orca.json", "social_force.json"):
         assert stable(tmp_path / "one" / name) == stable(tmp_path / "two" / name)
     assert (tmp_path / "one" / "LEADERBOARD.md").read_text() == (tmp_path / "two" / "LEADERBOARD.md").read_text()
     # one method at a time, then both: the stored cells are reused and the board is the same; a run shows the methods
     # asked for only
-    harness.run(suite(), entries[1:], str(tmp_path / "three"))
-    harness.run(suite(), entries[:1], str(tmp_path / "three"))
+    leaderboard.run_suite(suite(), entries[1:], str(tmp_path / "three"))
+    leaderboard.run_suite(suite(), entries[:1], str(tmp_path / "three"))
     assert "| social_force |" not in (tmp_path / "three" / "LEADERBOARD.md").read_text()
     lines: list[str] = []
-    harness.run(suite(), entries, str(tmp_path / "three"), progress=lines.append)
+    leaderboard.run_suite(suite(), entries, str(tmp_path / "three"), progress=lines.append)
     assert "6 stored, 0 to run" in lines[0]
     assert (tmp_path / "three" / "LEADERBOARD.md").read_text() == (tmp_path / "one" / "LEADERBOARD.md").read_text()
 
@@ -183,9 +184,9 @@ def test_a_killed_run_resumes_without_losing_or_recomputing_a_cell(tmp_path):
 def test_ray_backend_equals_local(tmp_path):
     pytest.importorskip("ray")
     entries = [leaderboard.ENTRIES["orca"], leaderboard.ENTRIES["social_force"]]
-    quick = harness.load_suite("quick", episodes=6)
-    harness.run(quick, entries, str(tmp_path / "local"), workers=2)
-    harness.run(quick, entries, str(tmp_path / "ray"), workers=2, backend="ray")
+    quick = leaderboard.load_suite("quick", episodes=6)
+    leaderboard.run_suite(quick, entries, str(tmp_path / "local"), workers=2)
+    leaderboard.run_suite(quick, entries, str(tmp_path / "ray"), workers=2, backend="ray")
     for name in ("orca.json", "social_force.json"):
         assert stable(tmp_path / "local" / name) == stable(tmp_path / "ray" / name)
 
@@ -200,7 +201,7 @@ def test_cli_leaderboard_list_and_errors(capsys):
     assert "--methods: unknown 'nope'" in capsys.readouterr().err
     assert main(["leaderboard", "run", "--suite", "quick", "--methods", "orca", "--backend", "spark"]) == 2
     assert "valid choices: local, ray" in capsys.readouterr().err
-    assert os.path.exists(harness.SUITES_DIR / "paper.toml")
+    assert os.path.exists(leaderboard.SUITES_DIR / "paper.toml")
 
 
 def test_render_writes_one_episode_of_any_policy(tmp_path, capsys):
@@ -242,19 +243,19 @@ def test_an_edited_outside_policy_is_re_evaluated_and_an_unchanged_one_reused(tm
     out = str(tmp_path / "board")
     lines: list[str] = []
     load(1.0)
-    first = harness.run(s, entries, out, progress=lines.append)["mine_tmp"][0]
+    first = leaderboard.run_suite(s, entries, out, progress=lines.append)["mine_tmp"][0]
     load(1.0)  # unchanged source: nothing re-evaluated
     lines.clear()
-    harness.run(s, entries, out, progress=lines.append)
+    leaderboard.run_suite(s, entries, out, progress=lines.append)
     assert "1 stored, 0 to run" in lines[0]
     load(0.3)  # edited: the cell is re-evaluated and the row shows the edited policy
     lines.clear()
-    second = harness.run(s, entries, out, progress=lines.append)["mine_tmp"][0]
+    second = leaderboard.run_suite(s, entries, out, progress=lines.append)["mine_tmp"][0]
     assert "0 stored, 1 to run" in lines[0]
     assert second["nav_time"] != first["nav_time"] or second["success_rate"] != first["success_rate"]
     board = (tmp_path / "board" / "LEADERBOARD.md").read_text()
     assert "| mine_tmp |" in board
-    harness.run(s, [leaderboard.ENTRIES["orca"]], out)
+    leaderboard.run_suite(s, [leaderboard.ENTRIES["orca"]], out)
     board = (tmp_path / "board" / "LEADERBOARD.md").read_text()
     assert "| orca |" in board and "mine_tmp" not in board  # the methods asked for
 
@@ -307,7 +308,7 @@ def test_a_policy_reading_full_state_runs_in_its_own_section(tmp_path, monkeypat
     POLICIES.register("omniscient_tmp", Omniscient)
     s = suite(rows=("II/N=10",), episodes=4, worlds=4)
     entries = [leaderboard.ENTRIES["orca"], leaderboard.parse_entry("omni=omniscient_tmp")]
-    harness.run(s, entries, str(tmp_path))
+    leaderboard.run_suite(s, entries, str(tmp_path))
     cell = json.loads((tmp_path / "cells" / "omni" / "II-n-10.json").read_text())
     assert cell["fingerprint"]["sensing"] == "full"
     md = (tmp_path / "LEADERBOARD.md").read_text()
