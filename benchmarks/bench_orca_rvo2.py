@@ -21,6 +21,7 @@ Prints per configuration the median agent-steps/s of each and the ratio crowdben
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import statistics
@@ -111,10 +112,8 @@ def main() -> None:
     p.add_argument("--target", type=int, default=100_000, help="agent-steps per run")
     p.add_argument("--json", help="also write the results here")
     a = p.parse_args()
-    try:
+    with contextlib.suppress(OSError):
         os.sched_setaffinity(0, {0})
-    except OSError:
-        pass
     crowdbench_run(bench_crowd(100, 1), 1, 2)  # compile (or load the cache) outside the timer
     rows = []
     print("| crowd | worlds | N | crowdbench M agent-steps/s | RVO2 M | crowdbench / RVO2 per round | median |")

@@ -374,8 +374,8 @@ def _build_grid(pos, active, b, max_cell, per_cell, cell_start, cell_of, sx, sy,
     """Cell lists of world ``b``'s active agents (counting sort), cells row by row (``k = gy·nx + gx``): the agents
     of cell ``k`` are ``sidx[cell_start[k]:cell_start[k + 1]]`` in index order, at ``(sx, sy)`` (copies of their
     positions, so that a row of cells is one contiguous run of memory). ``geo`` (out): min x, min y, cell size, nx,
-    ny, slack, 1 / cell size. The cell size gives about ``per_cell`` agents per cell on average, at most ``max_cell`` [m] (a third
-    of the neighbour range: sparse or ring-shaped crowds still get small cells), with at most
+    ny, slack, 1 / cell size. The cell size gives about ``per_cell`` agents per cell on average, at most
+    ``max_cell`` [m] (half the neighbour range: sparse or ring-shaped crowds still get small cells), with at most
     ``len(cell_start) − 1`` cells; ``slack`` [m] bounds how far rounding may put an agent outside its cell.
     ``cell_of`` (scratch, length A): each agent's cell."""
     A = pos.shape[1]
@@ -617,7 +617,8 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
                 reach = 0.0
                 for j in range(A):
                     reach = max(reach, neighbor_dist[b, j])
-                _build_grid(pos, active, b, reach * GRID_MAX_CELL, GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx, geo)
+                _build_grid(pos, active, b, reach * GRID_MAX_CELL, GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx,
+                            geo)
         for i in range(A):
             if not (active[b, i] and controlled[b, i]):
                 out[b, i, 0], out[b, i, 1] = vel[b, i, 0], vel[b, i, 1]
