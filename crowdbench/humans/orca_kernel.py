@@ -5,12 +5,12 @@ Source of truth: the reference C++ library, RVO2 2.0.x (``Agent::computeNeighbor
 
 * computed in float64 (the C++ library uses float32; see ``tests/data/README.md`` for the tolerances this meets);
 * agent neighbours are found by brute force in small crowds and on a grid of cells above ``GRID_MIN`` agents
-  (rings of cells searched outward until no unvisited cell can hold a nearer agent — RVO2's kd-tree query with its
-  shrinking range, on cells), obstacle edges by brute force. The result is the same set — the ``max_neighbors``
-  nearest agents strictly within ``neighbor_dist`` sorted by squared distance, and the obstacle edges within
-  ``time_horizon_obst * max_speed + radius`` seen from their right side — only exact distance *ties* may be ordered
-  differently (RVO2 keeps kd-tree visiting order; here it is index order, on either path: the grid and the brute
-  force give bit-identical velocities, tested at N = 200 and 1,000);
+  (the cells around an agent ranked, then the rows of cells that the k-th distance still reaches — RVO2's kd-tree
+  query with its shrinking range, on cells), obstacle edges by brute force. The result is the same set — the
+  ``max_neighbors`` nearest agents strictly within ``neighbor_dist`` sorted by squared distance, and the obstacle
+  edges within ``time_horizon_obst * max_speed + radius`` seen from their right side — only exact distance *ties*
+  may be ordered differently (RVO2 keeps kd-tree visiting order; here it is index order, on either path: the grid
+  and the brute force give bit-identical velocities, tested at N = 200 and 1,000);
 * each agent may ignore one other agent (``ignore``), used by the latent-responsive crowd to hide the robot.
 
 All worlds share one obstacle set. Obstacles are stored RVO2-style as vertices with ``next``/``prev`` links,
@@ -522,13 +522,23 @@ def _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, ge
         x0, x1, y0, y1 = nx0, nx1, ny0, ny1
     cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
     bound = nb_d[cnt - 1]
-    # every agent beyond the disc of radius sqrt(bound) is out; rows and columns widened by the rounding slack
+    # done if the disc of radius sqrt(bound) lies within the square (its sides with cells beyond)
+    lower = np.inf
+    if x0 > 0:
+        lower = min(lower, px - (minx + x0 * c))
+    if x1 < nx - 1:
+        lower = min(lower, minx + (x1 + 1) * c - px)
+    if y0 > 0:
+        lower = min(lower, py - (miny + y0 * c))
+    if y1 < ny - 1:
+        lower = min(lower, miny + (y1 + 1) * c - py)
+    lower = max(lower - eps, 0.0)
+    if lower * lower > bound:
+        return cnt
+    # every agent beyond the disc is out; rows and columns widened by the rounding slack
     reach = np.sqrt(bound) + eps
     r0 = min(max(int(np.floor((py - reach - miny) * inv_c)), 0), ny - 1)
     r1 = min(max(int(np.floor((py + reach - miny) * inv_c)), 0), ny - 1)
-    if r0 >= y0 and r1 <= y1 and min(max(int(np.floor((px - reach - minx) * inv_c)), 0), nx - 1) >= x0 \
-            and min(max(int(np.floor((px + reach - minx) * inv_c)), 0), nx - 1) <= x1:
-        return cnt
     for gy in range(r0, r1 + 1):
         if gy < cy:
             gap = py - (miny + (gy + 1) * c) - eps
