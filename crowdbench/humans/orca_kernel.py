@@ -5,12 +5,12 @@ Source of truth: the reference C++ library, RVO2 2.0.x (``Agent::computeNeighbor
 
 * computed in float64 (the C++ library uses float32; see ``tests/data/README.md`` for the tolerances this meets);
 * agent neighbours are found by brute force in small crowds and on a grid of cells above ``GRID_MIN`` agents
-  (rings of cells searched outward until no unvisited cell can hold a nearer agent — RVO2's kd-tree query with its
-  shrinking range, on cells), obstacle edges by brute force. The result is the same set — the ``max_neighbors``
-  nearest agents strictly within ``neighbor_dist`` sorted by squared distance, and the obstacle edges within
-  ``time_horizon_obst * max_speed + radius`` seen from their right side — only exact distance *ties* may be ordered
-  differently (RVO2 keeps kd-tree visiting order; here it is index order, on either path: the grid and the brute
-  force give bit-identical velocities, tested at N = 200 and 1,000);
+  (the cells around an agent ranked, then the rows of cells that the k-th distance still reaches — RVO2's kd-tree
+  query with its shrinking range, on cells), obstacle edges by brute force. The result is the same set — the
+  ``max_neighbors`` nearest agents strictly within ``neighbor_dist`` sorted by squared distance, and the obstacle
+  edges within ``time_horizon_obst * max_speed + radius`` seen from their right side — only exact distance *ties*
+  may be ordered differently (RVO2 keeps kd-tree visiting order; here it is index order, on either path: the grid
+  and the brute force give bit-identical velocities, tested at N = 200 and 1,000);
 * each agent may ignore one other agent (``ignore``), used by the latent-responsive crowd to hide the robot.
 
 All worlds share one obstacle set. Obstacles are stored RVO2-style as vertices with ``next``/``prev`` links,
@@ -370,11 +370,14 @@ def _insert_nearest(nb_d, nb_idx, cnt, k_max, dsq, j):  # pragma: no cover - num
 
 
 @nb.njit(cache=True, error_model="numpy")
-def _build_grid(pos, active, b, max_cell, cell_start, cell_items, geo):  # pragma: no cover - numba
-    """Cell lists of world ``b``'s active agents (counting sort): agents of cell ``c`` are
-    ``cell_items[cell_start[c]:cell_start[c + 1]]``, in index order. ``geo`` (out): min x, min y, cell size, nx, ny.
-    The cell size gives about two agents per cell on average, at most ``max_cell`` [m] (a third of the neighbour
-    range: sparse or ring-shaped crowds still get small cells), with at most ``len(cell_start) − 1`` cells."""
+def _build_grid(pos, active, b, max_cell, per_cell, cell_start, cell_of, sx, sy, sidx, geo):  # pragma: no cover
+    """Cell lists of world ``b``'s active agents (counting sort), cells row by row (``k = gy·nx + gx``): the agents
+    of cell ``k`` are ``sidx[cell_start[k]:cell_start[k + 1]]`` in index order, at ``(sx, sy)`` (copies of their
+    positions, so that a row of cells is one contiguous run of memory). ``geo`` (out): min x, min y, cell size, nx,
+    ny, slack, 1 / cell size. The cell size gives about ``per_cell`` agents per cell on average, at most
+    ``max_cell`` [m] (half the neighbour range: sparse or ring-shaped crowds still get small cells), with at most
+    ``len(cell_start) − 1`` cells; ``slack`` [m] bounds how far rounding may put an agent outside its cell.
+    ``cell_of`` (scratch, length A): each agent's cell."""
     A = pos.shape[1]
     minx = miny = np.inf
     maxx = maxy = -np.inf
@@ -385,59 +388,112 @@ def _build_grid(pos, active, b, max_cell, cell_start, cell_items, geo):  # pragm
             minx, maxx, miny, maxy = min(minx, x), max(maxx, x), min(miny, y), max(maxy, y)
             n += 1
     w, h = max(maxx - minx, 1e-6), max(maxy - miny, 1e-6)
-    c = max(min(np.sqrt(w * h / max(n, 1) * 2.0), max_cell), 1e-3)
+    c = max(min(np.sqrt(w * h / max(n, 1) * per_cell), max_cell), 1e-3)
     cap = cell_start.shape[0] - 1
     while (int(w / c) + 1) * (int(h / c) + 1) > cap:
         c *= 1.25
     nx, ny = int(w / c) + 1, int(h / c) + 1
     geo[0], geo[1], geo[2], geo[3], geo[4] = minx, miny, c, nx, ny
+    geo[5] = 1e-9 * (1.0 + abs(minx) + abs(miny) + w + h + c)
+    geo[6] = 1.0 / c
     cell_start[: nx * ny + 1] = 0
     for j in range(A):
         if active[b, j]:
-            cell_start[min(int((pos[b, j, 0] - minx) / c), nx - 1) * ny
-                       + min(int((pos[b, j, 1] - miny) / c), ny - 1) + 1] += 1
+            k = min(int((pos[b, j, 1] - miny) / c), ny - 1) * nx + min(int((pos[b, j, 0] - minx) / c), nx - 1)
+            cell_of[j] = k
+            cell_start[k + 1] += 1
     for k in range(nx * ny):
         cell_start[k + 1] += cell_start[k]
-    fill = cell_start[: nx * ny].copy()
-    for j in range(A):  # ascending j: each cell lists its agents in index order
+    for j in range(A):  # ascending j: each cell lists its agents in index order; cell_start[k] ends at k + 1's start
         if active[b, j]:
-            k = min(int((pos[b, j, 0] - minx) / c), nx - 1) * ny + min(int((pos[b, j, 1] - miny) / c), ny - 1)
-            cell_items[fill[k]] = j
-            fill[k] += 1
+            k = cell_of[j]
+            t = cell_start[k]
+            sx[t], sy[t], sidx[t] = pos[b, j, 0], pos[b, j, 1], j
+            cell_start[k] = t + 1
+    for k in range(nx * ny, 0, -1):
+        cell_start[k] = cell_start[k - 1]
+    cell_start[0] = 0
 
 
-@nb.njit(cache=True, error_model="numpy")
-def _grid_nearest(pos, active, b, i, skip, px, py, range_sq, k_max, cell_start, cell_items, geo, nb_d,
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):  # pragma: no cover - numba
+    """:func:`_nearest` for candidates in any order: the ``k_max`` smallest (distance, index) pairs, sorted, into
+    ``nb_d``/``nb_idx`` (length ≥ ``m`` + 1); returns their count. Branch-free ranks up to 48 candidates (``rank``:
+    scratch of 48), else insertion."""
+    cnt = min(m, k_max)
+    if m <= 48:
+        discard = nb_d.shape[0] - 1
+        rank[:m] = 0
+        for q in range(m):  # inner loop over p: vectorised, the ranks stay in registers
+            dq, iq = cand_d[q], cand_idx[q]
+            for p in range(m):
+                rank[p] += (dq < cand_d[p]) | ((dq == cand_d[p]) & (iq < cand_idx[p]))
+        for p in range(m):
+            slot = rank[p] if rank[p] < cnt else discard
+            nb_d[slot], nb_idx[slot] = cand_d[p], cand_idx[p]
+        return cnt
+    c = 0
+    for p in range(m):
+        c = _insert_nearest(nb_d, nb_idx, c, k_max, cand_d[p], cand_idx[p])
+    return cnt
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _gather(i, skip, px, py, bound, sx, sy, sidx, t0, t1, cand_d, cand_idx, m):  # pragma: no cover - numba
+    """Append the sorted agents ``t0 ≤ t < t1`` with squared distance ``< bound`` (not ``i``, not ``skip``) to the
+    candidates, without branches; returns the new count (``cand_*`` need one spare slot)."""
+    for t in range(t0, t1):
+        dsq = (px - sx[t]) ** 2 + (py - sy[t]) ** 2
+        j = sidx[t]
+        cand_d[m], cand_idx[m] = dsq, j
+        m += (dsq < bound) & (j != i) & (j != skip)
+    return m
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _scan(i, skip, px, py, range_sq, k_max, sx, sy, sidx, t0, t1, nb_d, nb_idx, cnt, bound):  # pragma: no cover
+    """Sorted agents ``t0 ≤ t < t1`` into the nearest list (``bound``: the k-th distance once full, else the range);
+    returns the new (count, bound)."""
+    for t in range(t0, t1):
+        dsq = (px - sx[t]) ** 2 + (py - sy[t]) ** 2
+        if dsq <= bound:
+            j = sidx[t]
+            if j != i and j != skip and dsq < range_sq:  # noqa: SIM109 (numba-friendly)
+                cnt = _insert_nearest(nb_d, nb_idx, cnt, k_max, dsq, j)
+                if cnt == k_max:
+                    bound = nb_d[cnt - 1]
+    return cnt, bound
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx, rank, nb_d,
                   nb_idx):  # pragma: no cover - numba
-    """The ``k_max`` nearest active agents (not ``i``, not ``skip``) strictly within ``range_sq`` of agent ``i`` of
-    world ``b``, by rings of grid cells outward until no unvisited cell can hold a nearer one — exactly the set and
-    order of the brute-force search (distance, then index). Returns their count."""
+    """The ``k_max`` nearest active agents (not ``i``, not ``skip``) strictly within ``range_sq`` of point
+    (``px``, ``py``) on :func:`_build_grid`'s cells — exactly the set and order of the brute-force search (distance,
+    then index), whatever order the candidates come in. Returns their count.
+
+    1. Squares of cells around the point, 3 × 3 then growing ring by ring until they hold ``k_max`` candidates in
+       range (or cover the range): gathered without branches, then ranked (:func:`_select`); the k-th distance is
+       the new bound.
+    2. Each row of cells that the disc of that bound reaches, over the columns that the disc spans at the row's
+       nearest edge, outside the square — one contiguous run each —, candidates inserted as they come (few: the
+       bound rejects most), the bound shrinking.
+    """
     minx, miny, c = geo[0], geo[1], geo[2]
     nx, ny = int(geo[3]), int(geo[4])
-    cx = min(max(int((px - minx) / c), 0), nx - 1)
-    cy = min(max(int((py - miny) / c), 0), ny - 1)
-    cnt = 0
-    r = 0
-    while True:
-        for gx in range(cx - r, cx + r + 1):
-            if gx < 0 or gx >= nx:
-                continue
-            edge = gx == cx - r or gx == cx + r
-            step = 1 if edge else 2 * r
-            gy = cy - r
-            while gy <= cy + r:
-                if 0 <= gy < ny:
-                    k = gx * ny + gy
-                    for t in range(cell_start[k], cell_start[k + 1]):
-                        j = cell_items[t]
-                        if j == i or j == skip:  # noqa: SIM109 (numba-friendly)
-                            continue
-                        dsq = (px - pos[b, j, 0]) ** 2 + (py - pos[b, j, 1]) ** 2
-                        if dsq < range_sq:
-                            cnt = _insert_nearest(nb_d, nb_idx, cnt, k_max, dsq, j)
-                gy += step if step > 0 else 1
-        # an unvisited agent lies outside the square of cells searched: at least as far as that square's nearest
-        # side that still has cells beyond it (none left: the search is complete)
+    eps, inv_c = geo[5], geo[6]  # (any cell (cx, cy) would give the same result: the bounds are geometric)
+    cx = min(max(int((px - minx) * inv_c), 0), nx - 1)
+    cy = min(max(int((py - miny) * inv_c), 0), ny - 1)
+    x0, x1 = max(cx - 1, 0), min(cx + 1, nx - 1)
+    y0, y1 = max(cy - 1, 0), min(cy + 1, ny - 1)
+    m = 0
+    for gy in range(y0, y1 + 1):
+        row = gy * nx
+        m = _gather(i, skip, px, py, range_sq, sx, sy, sidx, cell_start[row + x0], cell_start[row + x1 + 1], cand_d,
+                    cand_idx, m)
+    r = 1
+    while m < k_max:
+        # unvisited agents lie outside the square: at least as far as its nearest side with cells beyond
         lower = np.inf
         if cx - r > 0:
             lower = min(lower, px - (minx + (cx - r) * c))
@@ -447,17 +503,77 @@ def _grid_nearest(pos, active, b, i, skip, px, py, range_sq, k_max, cell_start, 
             lower = min(lower, py - (miny + (cy - r) * c))
         if cy + r < ny - 1:
             lower = min(lower, miny + (cy + r + 1) * c - py)
-        if lower == np.inf:
-            return cnt
-        lower_sq = max(lower, 0.0) ** 2
-        if lower_sq >= range_sq or (cnt == k_max and lower_sq > nb_d[cnt - 1]):
-            return cnt
+        lower = max(lower - eps, 0.0)
+        if lower * lower >= range_sq:
+            return _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
         r += 1
+        nx0, nx1 = max(cx - r, 0), min(cx + r, nx - 1)
+        ny0, ny1 = max(cy - r, 0), min(cy + r, ny - 1)
+        for gy in range(ny0, ny1 + 1):
+            row = gy * nx
+            if y0 <= gy <= y1:
+                m = _gather(i, skip, px, py, range_sq, sx, sy, sidx, cell_start[row + nx0], cell_start[row + x0],
+                            cand_d, cand_idx, m)
+                m = _gather(i, skip, px, py, range_sq, sx, sy, sidx, cell_start[row + x1 + 1],
+                            cell_start[row + nx1 + 1], cand_d, cand_idx, m)
+            else:
+                m = _gather(i, skip, px, py, range_sq, sx, sy, sidx, cell_start[row + nx0], cell_start[row + nx1 + 1],
+                            cand_d, cand_idx, m)
+        x0, x1, y0, y1 = nx0, nx1, ny0, ny1
+    cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+    bound = nb_d[cnt - 1]
+    # done if the disc of radius sqrt(bound) lies within the square (its sides with cells beyond)
+    lower = np.inf
+    if x0 > 0:
+        lower = min(lower, px - (minx + x0 * c))
+    if x1 < nx - 1:
+        lower = min(lower, minx + (x1 + 1) * c - px)
+    if y0 > 0:
+        lower = min(lower, py - (miny + y0 * c))
+    if y1 < ny - 1:
+        lower = min(lower, miny + (y1 + 1) * c - py)
+    lower = max(lower - eps, 0.0)
+    if lower * lower > bound:
+        return cnt
+    # every agent beyond the disc is out; rows and columns widened by the rounding slack
+    reach = np.sqrt(bound) + eps
+    r0 = min(max(int(np.floor((py - reach - miny) * inv_c)), 0), ny - 1)
+    r1 = min(max(int(np.floor((py + reach - miny) * inv_c)), 0), ny - 1)
+    for gy in range(r0, r1 + 1):
+        if gy < cy:
+            gap = py - (miny + (gy + 1) * c) - eps
+        elif gy > cy:
+            gap = (miny + gy * c) - py - eps
+        else:
+            gap = 0.0
+        gap = max(gap, 0.0)
+        if gap * gap > bound:
+            continue
+        half = np.sqrt(bound - gap * gap) + eps
+        g0 = min(max(int(np.floor((px - half - minx) * inv_c)), 0), nx - 1)
+        g1 = min(max(int(np.floor((px + half - minx) * inv_c)), 0), nx - 1)
+        row = gy * nx
+        if y0 <= gy <= y1:  # the square is done: left and right of it
+            if g0 < x0:
+                cnt, bound = _scan(i, skip, px, py, range_sq, k_max, sx, sy, sidx, cell_start[row + g0],
+                                   cell_start[row + x0], nb_d, nb_idx, cnt, bound)
+            if g1 > x1:
+                cnt, bound = _scan(i, skip, px, py, range_sq, k_max, sx, sy, sidx, cell_start[row + x1 + 1],
+                                   cell_start[row + g1 + 1], nb_d, nb_idx, cnt, bound)
+        else:
+            cnt, bound = _scan(i, skip, px, py, range_sq, k_max, sx, sy, sidx, cell_start[row + g0],
+                               cell_start[row + g1 + 1], nb_d, nb_idx, cnt, bound)
+    return cnt
 
 
 GRID_MIN = 64
 """Worlds with more active agents than this find neighbours on a grid (:func:`_grid_nearest`), smaller ones by
 brute force; both give the same neighbours in the same order."""
+
+GRID_PER_CELL = 2.0
+"""Agents per grid cell on average (the cell size; any gives the same neighbours)."""
+GRID_MAX_CELL = 0.5
+"""Largest grid cell, as a fraction of the largest neighbour distance."""
 
 
 @nb.njit(cache=True, error_model="numpy")
@@ -486,16 +602,20 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
     pp = np.empty((L, 2))
     pd = np.empty((L, 2))
     res = np.empty(2)
-    cand_idx = np.empty(A, np.int64)
-    cand_d = np.empty(A)
+    cand_idx = np.empty(A + 8, np.int64)  # + 8: the spare slot of _gather, the padding of _select
+    cand_d = np.empty(A + 8)
     nb_idx = np.empty(A + 1, np.int64)  # + 1: the discard slot of _nearest
     nb_d = np.empty(A + 1)
     ob_idx = np.empty(V + 1, np.int64)
     ob_d = np.empty(V + 1)
     inv_dt = 1.0 / dt
-    cell_start = np.zeros(16 * A + 2, np.int64)
-    cell_items = np.empty(A, np.int64)
-    geo = np.empty(5)
+    cell_start = np.empty(16 * A + 2, np.int64)
+    cell_of = np.empty(A, np.int64)
+    sx = np.empty(A)
+    sy = np.empty(A)
+    sidx = np.empty(A, np.int64)
+    geo = np.empty(7)
+    rank = np.empty(48, np.int64)
     for b in range(B):
         use_grid = False
         if grid_min < A:
@@ -507,7 +627,8 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
                 reach = 0.0
                 for j in range(A):
                     reach = max(reach, neighbor_dist[b, j])
-                _build_grid(pos, active, b, reach / 3.0, cell_start, cell_items, geo)
+                _build_grid(pos, active, b, reach * GRID_MAX_CELL, GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx,
+                            geo)
         for i in range(A):
             if not (active[b, i] and controlled[b, i]):
                 out[b, i, 0], out[b, i, 1] = vel[b, i, 0], vel[b, i, 1]
@@ -527,8 +648,8 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
             cnt = 0
             skip = ignore[b, i]
             if k_max > 0 and use_grid:
-                cnt = _grid_nearest(pos, active, b, i, skip, px, py, range_sq, k_max, cell_start, cell_items, geo,
-                                    nb_d, nb_idx)
+                cnt = _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx,
+                                    rank, nb_d, nb_idx)
             elif k_max > 0:
                 m = 0
                 for j in range(A):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -260,3 +262,63 @@ def test_facade_agrees_with_python_rvo2_on_a_large_crowd(n):
             sim.doStep()
     a, b = (np.array([s.getAgentPosition(i) for i in range(n)]) for s in sims)
     assert np.abs(a - b).max() < 1e-3
+
+
+KERNEL_OUTPUTS = Path(__file__).resolve().parents[1] / "data" / "orca_kernel_outputs.npz"
+
+
+def _kernel_scenario(name: str):
+    """``orca_batch`` inputs of the recorded-kernel scenarios: ``circle``/``grid`` — ``bench_crowd(200, 1, name)``
+    with the benchmark's parameters; ``mixed`` — 3 worlds of 40 (brute force) with an obstacle, inactive,
+    uncontrolled and ignored agents, varied radii, speeds and neighbour caps."""
+    from crowdbench.bench import bench_crowd
+    from crowdbench.humans.orca_kernel import build_obstacles
+
+    if name in ("circle", "grid"):
+        pos = bench_crowd(200, 1, name)
+        f = np.ones(pos.shape[:2])
+        args = (0.31 * f, f, 10.0 * f, np.full(f.shape, 10, np.int64), 5.0 * f, 5.0 * f, f > 0, f > 0,
+                np.full(f.shape, -1, np.int64))
+        return pos, args, build_obstacles([])
+    rng = np.random.default_rng(46)
+    pos = rng.uniform(-4.0, 4.0, (3, 40, 2))
+    shape = pos.shape[:2]
+    ignore = np.full(shape, -1, np.int64)
+    ignore[:, ::5] = 0
+    args = (rng.uniform(0.2, 0.4, shape), rng.uniform(0.8, 1.5, shape), rng.uniform(2.0, 10.0, shape),
+            rng.integers(0, 12, shape), rng.uniform(1.0, 5.0, shape), rng.uniform(1.0, 5.0, shape),
+            rng.random(shape) > 0.1, rng.random(shape) > 0.1, ignore)
+    obst = build_obstacles([[(-1.0, -1.0), (1.0, -1.0), (1.0, 0.0), (-1.0, 0.0)], [(2.0, 2.0), (3.0, 3.0)],
+                            [(-3.0, 1.0), (-2.0, 2.5), (-3.5, 3.0)]])
+    return pos, args, obst
+
+
+def _kernel_run(name: str, steps: int = 4) -> np.ndarray:
+    """Velocities ``(steps, B, A, 2)`` of ``orca_batch`` over ``steps`` steps of :func:`_kernel_scenario`."""
+    from crowdbench.humans import preferred_velocity
+    from crowdbench.humans.orca_kernel import orca_batch
+
+    pos, args, obst = _kernel_scenario(name)
+    goal, vel, vmax = -pos, np.zeros_like(pos), args[1]
+    outs = []
+    for _ in range(steps):
+        out = np.empty_like(pos)
+        orca_batch(pos, vel, preferred_velocity(pos, goal, vmax, 0.25), *args, *obst, 0.25, out)
+        outs.append(out)
+        vel = out
+        pos = pos + vel * 0.25
+    return np.array(outs)
+
+
+@pytest.mark.parametrize("name", ["circle", "grid", "mixed"])
+def test_kernel_equals_recorded_output_bit_for_bit(name):
+    """The optimised kernel's velocities equal those the kernel gave before its speed work (issue 46), bit for bit:
+    ``tests/data/orca_kernel_outputs.npz``, written by ``python tests/humans/test_orca.py`` with the kernel of
+    commit 09f4722 (N = 200 circle and grid crowds — overlapping people, infeasible programs, the grid search —
+    and small mixed worlds with obstacles, brute force)."""
+    want = np.load(KERNEL_OUTPUTS)[name]
+    np.testing.assert_array_equal(_kernel_run(name), want)
+
+
+if __name__ == "__main__":  # regenerate tests/data/orca_kernel_outputs.npz (only from a kernel known to be right)
+    np.savez_compressed(KERNEL_OUTPUTS, **{k: _kernel_run(k) for k in ("circle", "grid", "mixed")})

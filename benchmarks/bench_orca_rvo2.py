@@ -1,0 +1,135 @@
+"""ORCA, crowdbench's kernel against RVO2, alternated run by run in one process: agent-steps per CPU second.
+
+    PYTHONPATH=. python benchmarks/bench_orca_rvo2.py [--rounds 5] [--n 20 50 100 200 500 1000] [--worlds 1 64]
+                                                      [--crowds circle grid] [--target 100000] [--json out.json]
+
+Needs Python-RVO2 (``import rvo2``) in the interpreter, built ``-O2`` as ``benchmarks/bench_peers.py`` describes.
+For each crowd (``crowdbench.bench.bench_crowd``: ``circle`` — people on a ring, overlapping from N ≈ 100, crossing
+through its centre; ``grid`` — a jittered lattice, nobody overlapping), world count and N, each round times one run
+of crowdbench's ``orca_batch`` (all worlds in one call, one thread) and then one run of RVO2 (one
+``PyRVOSimulator`` per world, ``doStep`` on each in turn), on the same crowd with the same parameters (neighbour
+distance 10 m, 10 neighbours, time horizons 5 s, radius 0.31 m, max speed 1 m/s, dt 0.25 s; start velocity 0).
+A run is ``episodes`` × ``steps`` steps, each episode from the start state, so that every run does the same work:
+``steps`` = 20 (fewer for large batches), ``episodes`` such that a run has about ``--target`` agent-steps. Before
+every step the preferred velocities (``crowdbench.humans.preferred_velocity`` toward the goal = −start, speed 1)
+are set outside the timer; only ``orca_batch`` + the position update (crowdbench) and ``doStep`` (RVO2, which
+updates positions itself) are timed, in process CPU time (``time.process_time``), pinned to one core.
+
+Prints per configuration the median agent-steps/s of each and the ratio crowdbench / RVO2 of every round.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import statistics
+import time
+
+import numpy as np
+
+from crowdbench.bench import bench_crowd
+from crowdbench.humans import preferred_velocity
+from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
+
+DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, RADIUS, MAX_SPEED = 0.25, 10.0, 10, 5.0, 0.31, 1.0
+
+
+def plan(n: int, worlds: int, target: int) -> tuple[int, int]:
+    """(episodes, steps) of one run: about ``target`` agent-steps."""
+    steps = int(max(2, min(20, target // (n * worlds))))
+    return int(max(1, round(target / (steps * n * worlds)))), steps
+
+
+def crowdbench_run(start: np.ndarray, episodes: int, steps: int, kernel=orca_batch) -> float:
+    """Agent-steps per CPU second of ``kernel`` (``orca_batch``'s signature) on ``start`` ``(B, N, 2)``."""
+    B, N = start.shape[:2]
+    f = np.ones((B, N))
+    args = (RADIUS * f, MAX_SPEED * f, NEIGHBOR_DIST * f, np.full((B, N), MAX_NEIGHBORS, np.int64), HORIZON * f,
+            HORIZON * f, np.ones((B, N), bool), np.ones((B, N), bool), np.full((B, N), -1, np.int64))
+    obst, goal = build_obstacles([]), -start
+    elapsed = 0.0
+    for _ in range(episodes):
+        pos, vel = start.copy(), np.zeros_like(start)
+        out = np.empty_like(start)
+        for _ in range(steps):
+            pref = preferred_velocity(pos, goal, f, DT)
+            t = time.process_time()
+            kernel(pos, vel, pref, *args, *obst, DT, out)
+            vel, out = out, vel
+            pos += vel * DT
+            elapsed += time.process_time() - t
+    return episodes * steps * B * N / elapsed
+
+
+def rvo2_run(start: np.ndarray, episodes: int, steps: int) -> float:
+    """Agent-steps per CPU second of Python-RVO2's ``doStep`` on ``start`` ``(B, N, 2)``, one simulator per world."""
+    import rvo2
+
+    B, N = start.shape[:2]
+    goal, f = -start, np.ones(N)
+    elapsed = 0.0
+    for _ in range(episodes):
+        sims = []
+        for w in range(B):
+            sim = rvo2.PyRVOSimulator(DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, HORIZON, RADIUS, MAX_SPEED)
+            for i in range(N):
+                sim.addAgent((float(start[w, i, 0]), float(start[w, i, 1])))
+            sim.processObstacles()
+            sims.append(sim)
+        for _ in range(steps):
+            for w, sim in enumerate(sims):
+                p = np.array([sim.getAgentPosition(i) for i in range(N)])
+                pref = preferred_velocity(p, goal[w], f, DT)
+                for i in range(N):
+                    sim.setAgentPrefVelocity(i, (float(pref[i, 0]), float(pref[i, 1])))
+            t = time.process_time()
+            for sim in sims:
+                sim.doStep()
+            elapsed += time.process_time() - t
+    return episodes * steps * B * N / elapsed
+
+
+def compare(n: int, worlds: int, crowd: str, rounds: int, target: int) -> dict:
+    start = bench_crowd(n, worlds, crowd)
+    episodes, steps = plan(n, worlds, target)
+    ours, peer = [], []
+    for _ in range(rounds):
+        ours.append(crowdbench_run(start, episodes, steps))
+        peer.append(rvo2_run(start, episodes, steps))
+    ratios = [o / p for o, p in zip(ours, peer, strict=True)]
+    return {"n": n, "worlds": worlds, "crowd": crowd, "episodes": episodes, "steps": steps,
+            "crowdbench": statistics.median(ours), "rvo2": statistics.median(peer), "ratios": ratios}
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--rounds", type=int, default=5)
+    p.add_argument("--n", type=int, nargs="+", default=[20, 50, 100, 200, 500, 1000])
+    p.add_argument("--worlds", type=int, nargs="+", default=[1, 64])
+    p.add_argument("--crowds", nargs="+", default=["circle", "grid"])
+    p.add_argument("--target", type=int, default=100_000, help="agent-steps per run")
+    p.add_argument("--json", help="also write the results here")
+    a = p.parse_args()
+    with contextlib.suppress(OSError):
+        os.sched_setaffinity(0, {0})
+    crowdbench_run(bench_crowd(100, 1), 1, 2)  # compile (or load the cache) outside the timer
+    rows = []
+    print("| crowd | worlds | N | crowdbench M agent-steps/s | RVO2 M | crowdbench / RVO2 per round | median |")
+    print("|---|---:|---:|---:|---:|---|---:|")
+    for crowd in a.crowds:
+        for worlds in a.worlds:
+            for n in a.n:
+                r = compare(n, worlds, crowd, a.rounds, a.target)
+                rows.append(r)
+                print(f"| {crowd} | {worlds} | {n} | {r['crowdbench'] / 1e6:.2f} | {r['rvo2'] / 1e6:.2f} | "
+                      f"{' '.join(f'{x:.2f}' for x in r['ratios'])} | {statistics.median(r['ratios']):.2f} |",
+                      flush=True)
+    if a.json:
+        with open(a.json, "w") as f:
+            json.dump(rows, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
