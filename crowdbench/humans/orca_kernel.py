@@ -617,6 +617,10 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
     geo = np.empty(7)
     rank = np.empty(48, np.int64)
     for b in range(B):
+        for j in range(A):
+            if active[b, j] and not (np.isfinite(pos[b, j, 0]) and np.isfinite(pos[b, j, 1])):
+                raise ValueError("orca_batch: pos holds a non-finite position (NaN or inf) of an active agent; "
+                                 "valid choices: finite positions [m]")
         use_grid = False
         if grid_min < A:
             n_act = 0

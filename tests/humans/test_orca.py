@@ -322,3 +322,14 @@ def test_kernel_equals_recorded_output_bit_for_bit(name):
 
 if __name__ == "__main__":  # regenerate tests/data/orca_kernel_outputs.npz (only from a kernel known to be right)
     np.savez_compressed(KERNEL_OUTPUTS, **{k: _kernel_run(k) for k in ("circle", "grid", "mixed")})
+
+
+@pytest.mark.parametrize("n", [10, 100])  # brute-force and grid neighbour search
+@pytest.mark.parametrize("bad", [float("nan"), float("inf")])
+def test_a_non_finite_position_is_one_clear_error_not_a_crash(n, bad):
+    sim = PyRVOSimulator(0.25, 10.0, 10, 5.0, 5.0, 0.3, 1.0)
+    for i in range(n):
+        sim.addAgent((float(i % 10), float(i // 10)))
+    sim.setAgentPosition(n // 2, (bad, 0.0))
+    with pytest.raises(ValueError, match="non-finite position"):
+        sim.doStep()
