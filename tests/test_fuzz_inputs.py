@@ -54,6 +54,25 @@ def time_limit(seconds: int):
         signal.signal(signal.SIGALRM, old)
 
 
+@pytest.fixture(scope="module", autouse=True)
+def compiled_kernels():
+    """Compile the world's and the pedestrian models' kernels and the planners' policies before any hang guard runs
+    (on a fresh clone nothing is cached: compiling is not a hang, and an alarm inside numba's compiler would leave
+    it half-built)."""
+    cfg = WorldConfig(num_humans=4)
+    for model in ("orca", "social_force", "responsive_orca"):
+        world = CrowdWorld(cfg, 2, "circle_crossing", model)
+        for name in ("orca", "social_force", "linear", "h2int"):
+            policy = make_policy(name, cfg)
+            world.step(policy.act(make_observation(policy.observation, cfg).build(world)))
+    for layout in LAYOUTS.names():
+        with contextlib.suppress(ValueError, TypeError):
+            CrowdWorld(cfg, 1, layout, "orca").step(np.zeros((1, 2)))
+    env = crowdbench.parallel_env(num_humans=4)
+    env.reset(seed=0)
+    env.step({a: env.action_space(a).sample() for a in env.agents})
+
+
 def names_of(kwargs: dict) -> set[str]:
     out = set()
     for k, v in kwargs.items():

@@ -52,6 +52,10 @@ class ORCAParams:
 
     def __post_init__(self) -> None:
         check_fields(self)
+        for name in ("neighbor_dist", "time_horizon", "time_horizon_obst", "safety_space", "preferred_speed"):
+            v = getattr(self, name)
+            if isinstance(v, int) and not isinstance(v, bool):  # one float kernel signature, not one per type
+                object.__setattr__(self, name, float(v))
         for name in ("neighbor_dist", "time_horizon", "time_horizon_obst"):
             if not getattr(self, name) > 0:
                 raise ValueError(f"{name} must be > 0, got {getattr(self, name)}")
