@@ -120,25 +120,11 @@ def gaussian_std_module(output_dim: int, distribution_cfg: dict[str, Any] | None
     return GaussianStd(output_dim, **cfg)
 
 
-class RecurrentCell(nn.Module):
-    """One GRU layer with a carried state: ``forward(z, masks, hidden_state)`` steps the internal state on ``(n, ·)``
-    inputs (rollouts) or runs padded trajectories ``(T, B, ·)`` from stored states (the update). rsl-rl's ``RNN``
-    interface; the GRU is :attr:`rnn`."""
+class CarriedState(nn.Module):
+    """A recurrence that carries its state between rollout steps in :attr:`hidden_state` ``(1, n, ·)`` (``None``:
+    zeros on the next step), with rsl-rl's ``reset`` and ``detach_hidden_state``."""
 
-    def __init__(self, input_size: int, hidden_size: int) -> None:
-        super().__init__()
-        self.rnn = nn.GRU(input_size=input_size, hidden_size=hidden_size, num_layers=1)
-        self.hidden_state: torch.Tensor | None = None
-
-    def forward(self, input: torch.Tensor, masks: torch.Tensor | None = None,  # noqa: A002 - rsl-rl's name
-                hidden_state: torch.Tensor | None = None) -> torch.Tensor:
-        if masks is not None:
-            if hidden_state is None:
-                raise ValueError("RecurrentCell: the update needs the stored initial hidden states")
-            out, _ = self.rnn(input, hidden_state)
-            return unpad_trajectories(out, masks)
-        out, self.hidden_state = self.rnn(input.unsqueeze(0), self.hidden_state)
-        return out
+    hidden_state: torch.Tensor | None = None
 
     def reset(self, dones: torch.Tensor | None = None, hidden_state: torch.Tensor | None = None) -> None:
         """All states (to ``hidden_state`` or none), or zero those of the worlds where ``dones == 1``."""
@@ -157,6 +143,26 @@ class RecurrentCell(nn.Module):
             else:
                 self.hidden_state[..., dones == 1, :] = self.hidden_state[..., dones == 1, :].detach()
 
+
+class RecurrentCell(CarriedState):
+    """One GRU layer with a carried state: ``forward(z, masks, hidden_state)`` steps the internal state on ``(n, ·)``
+    inputs (rollouts) or runs padded trajectories ``(T, B, ·)`` from stored states (the update). rsl-rl's ``RNN``
+    interface; the GRU is :attr:`rnn`."""
+
+    def __init__(self, input_size: int, hidden_size: int) -> None:
+        super().__init__()
+        self.rnn = nn.GRU(input_size=input_size, hidden_size=hidden_size, num_layers=1)
+        self.hidden_state: torch.Tensor | None = None
+
+    def forward(self, input: torch.Tensor, masks: torch.Tensor | None = None,  # noqa: A002 - rsl-rl's name
+                hidden_state: torch.Tensor | None = None) -> torch.Tensor:
+        if masks is not None:
+            if hidden_state is None:
+                raise ValueError("RecurrentCell: the update needs the stored initial hidden states")
+            out, _ = self.rnn(input, hidden_state)
+            return unpad_trajectories(out, masks)
+        out, self.hidden_state = self.rnn(input.unsqueeze(0), self.hidden_state)
+        return out
 
 class RecurrentTrunkActor(nn.Module):
     """Encoder → recurrence → MLP head → the Gaussian policy's mean (see the module docstring).

@@ -35,7 +35,13 @@ from typing import Any
 import torch
 from torch import nn
 
-from crowdbench.policies.nets import RecurrentTrunkActor, check_action_std, gaussian_cfg, unpad_trajectories
+from crowdbench.policies.nets import (
+    CarriedState,
+    RecurrentTrunkActor,
+    check_action_std,
+    gaussian_cfg,
+    unpad_trajectories,
+)
 
 ROBOT_NODE = 7
 """Robot node features: the first 7 of the robot vector [p_x, p_y, r, g_x, g_y, v_pref, θ]."""
@@ -92,7 +98,7 @@ class DSRNNConfig:
                 "distribution_cfg": gaussian_cfg(self.action_std, self.learn_std)}
 
 
-class DSRNNCore(nn.Module):
+class DSRNNCore(CarriedState):
     """DS-RNN's recurrence behind :class:`~crowdbench.policies.nets.RecurrentCell`'s interface (module docstring).
 
     Input per step: the flat observation ``(n, 9 + 3·slots)`` = robot vector (9) ‖ relative positions
@@ -157,23 +163,6 @@ class DSRNNCore(nn.Module):
             out, h = self.cell(x[t], h)
             outs.append(out)
         return unpad_trajectories(torch.stack(outs), masks)
-
-    def reset(self, dones: torch.Tensor | None = None, hidden_state: torch.Tensor | None = None) -> None:
-        """As :meth:`RecurrentCell.reset <crowdbench.policies.nets.RecurrentCell.reset>`: all states (to
-        ``hidden_state`` or none) or zero those of ``dones``."""
-        if dones is None:
-            self.hidden_state = hidden_state
-        elif self.hidden_state is not None:
-            if hidden_state is not None:
-                raise NotImplementedError("resetting done worlds to a given hidden state")
-            self.hidden_state[..., dones == 1, :] = 0.0
-
-    def detach_hidden_state(self, dones: torch.Tensor | None = None) -> None:
-        if self.hidden_state is not None:
-            if dones is None:
-                self.hidden_state = self.hidden_state.detach()
-            else:
-                self.hidden_state[..., dones == 1, :] = self.hidden_state[..., dones == 1, :].detach()
 
 
 class DSRNNActor(RecurrentTrunkActor):
