@@ -23,7 +23,7 @@ The encoder (everything before the GRU) is :meth:`AIGActor.encode_samples`, so t
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -145,6 +145,17 @@ class AIGActor(RecurrentTrunkActor):
         the original's two consecutive linear maps per attention input (``self.q`` then the attention's own input
         projection) run as one product of the two (the same function; its gradient reaches both). Equal to
         :meth:`encode_samples_reference` (the original's padded layout) up to rounding (tested)."""
+        return self._encode(obs, self._pool_packed)
+
+    def encode_samples_reference(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
+        """:meth:`encode_samples` as the original writes it (plain modules on the padded ``(rows, k)`` layout)."""
+        return self._encode(obs, self._pool_padded)
+
+    def _encode(self, obs: Mapping[str, torch.Tensor],
+                pool: Callable[[torch.Tensor, torch.Tensor, torch.Tensor], torch.Tensor]) -> torch.Tensor:
+        """Robot embedding, the crowd pooled by ``pool(humans (R, k, 12), in view (R, k), robot embedding (R, ·))``
+        → ``(R, human_embed)`` on the ``R`` rows with someone in view (``k``: the batch's most in view), the node
+        inputs."""
         robot, mask = obs["robot"], obs["mask"] > 0.5
         n = robot.shape[0]
         r = self.robot_embed(torch.cat([robot[:, 7:9], robot[:, :7]], -1))
@@ -152,25 +163,35 @@ class AIGActor(RecurrentTrunkActor):
         k = int(mask.sum(-1).max()) if n else 0
         rows = mask[:, 0]  # someone in view (nearest first)
         if k:
-            m = mask[rows, :k]
-            counts = m.sum(-1)  # (R,) pedestrians in view per row, nearest first: row b owns packed rows
-            offsets = np.zeros(m.shape[0] + 1, np.int64)  # offsets[b]:offsets[b+1]
-            np.cumsum(counts.numpy(), out=offsets[1:])
-            e = self.edge_embed(obs["humans"][rows, :k][m])  # (P, W) packed
-            W = e.shape[-1]
-            qkv = self._qkv(e)  # (P, 3W)
-            z = ragged_attention(qkv[:, :W], qkv[:, W:2 * W], qkv[:, 2 * W:], offsets, False,
-                                 self.self_attn.num_heads)
-            h = self.human_out(self.self_attn.out_proj(z))  # (P, human_embed)
-            seg = torch.repeat_interleave(torch.arange(len(counts)), counts)  # (P,) each pedestrian's row
-            score = (self.key(h) * self.query(r[rows]).index_select(0, seg)).sum(-1)
-            score = score * (self.slots / math.sqrt(self.aig.attention))  # (P,)
-            top = score.new_full((len(counts),), -torch.inf).scatter_reduce(0, seg, score.detach(), "amax")
-            w = torch.exp(score - top.index_select(0, seg))
-            w = w / w.new_zeros(len(counts)).index_add(0, seg, w).index_select(0, seg)  # softmax within each row
-            pooled = h.new_zeros(len(counts), h.shape[-1]).index_add(0, seg, w.unsqueeze(-1) * h)
+            pooled = pool(obs["humans"][rows, :k], mask[rows, :k], r[rows])
             attended = attended.index_put((rows.nonzero().squeeze(-1),), pooled)
         return torch.cat([self.robot_node(r), self.edge_node(attended)], -1)
+
+    def _pool_packed(self, humans: torch.Tensor, m: torch.Tensor, r: torch.Tensor) -> torch.Tensor:
+        counts = m.sum(-1)  # (R,) pedestrians in view per row, nearest first: row b owns packed rows
+        offsets = np.zeros(m.shape[0] + 1, np.int64)  # offsets[b]:offsets[b+1]
+        np.cumsum(counts.numpy(), out=offsets[1:])
+        e = self.edge_embed(humans[m])  # (P, W) packed
+        W = e.shape[-1]
+        qkv = self._qkv(e)  # (P, 3W)
+        z = ragged_attention(qkv[:, :W], qkv[:, W:2 * W], qkv[:, 2 * W:], offsets, False, self.self_attn.num_heads)
+        h = self.human_out(self.self_attn.out_proj(z))  # (P, human_embed)
+        seg = torch.repeat_interleave(torch.arange(len(counts)), counts)  # (P,) each pedestrian's row
+        score = (self.key(h) * self.query(r).index_select(0, seg)).sum(-1)
+        score = score * (self.slots / math.sqrt(self.aig.attention))  # (P,)
+        top = score.new_full((len(counts),), -torch.inf).scatter_reduce(0, seg, score.detach(), "amax")
+        w = torch.exp(score - top.index_select(0, seg))
+        w = w / w.new_zeros(len(counts)).index_add(0, seg, w).index_select(0, seg)  # softmax within each row
+        return h.new_zeros(len(counts), h.shape[-1]).index_add(0, seg, w.unsqueeze(-1) * h)
+
+    def _pool_padded(self, humans: torch.Tensor, m: torch.Tensor, r: torch.Tensor) -> torch.Tensor:
+        e = self.edge_embed(humans)
+        z, _ = self.self_attn(self.q(e), self.k(e), self.v(e), key_padding_mask=~m, need_weights=False)
+        h = self.human_out(z)
+        score = (self.key(h) @ self.query(r).unsqueeze(-1)).squeeze(-1)
+        score = score * (self.slots / math.sqrt(self.aig.attention))
+        w = torch.softmax(score.masked_fill(~m, -torch.inf), dim=-1)
+        return (w.unsqueeze(-1) * h).sum(1)
 
     def _qkv(self, e: torch.Tensor) -> torch.Tensor:
         """The attention inputs ``(P, 3W)`` of pedestrian embeddings ``e`` ``(P, W)``: the attention's input
@@ -186,25 +207,6 @@ class AIGActor(RecurrentTrunkActor):
         weight = (win @ wq).reshape(3 * W, W)
         bias = ((win @ bq.unsqueeze(-1)).squeeze(-1) + bin_).reshape(3 * W)
         return F.linear(e, weight, bias)
-
-    def encode_samples_reference(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
-        """:meth:`encode_samples` as the original writes it (plain modules on the padded ``(rows, k)`` layout)."""
-        robot, mask = obs["robot"], obs["mask"] > 0.5
-        n = robot.shape[0]
-        r = self.robot_embed(torch.cat([robot[:, 7:9], robot[:, :7]], -1))
-        attended = r.new_zeros(n, self.aig.human_embed)
-        k = int(mask.sum(-1).max()) if n else 0
-        rows = mask[:, 0]  # someone in view (nearest first)
-        if k:
-            m = mask[rows, :k]
-            e = self.edge_embed(obs["humans"][rows, :k])
-            z, _ = self.self_attn(self.q(e), self.k(e), self.v(e), key_padding_mask=~m, need_weights=False)
-            h = self.human_out(z)
-            score = (self.key(h) @ self.query(r[rows]).unsqueeze(-1)).squeeze(-1)
-            score = score * (self.slots / math.sqrt(self.aig.attention))
-            w = torch.softmax(score.masked_fill(~m, -torch.inf), dim=-1)
-            attended = attended.index_put((rows.nonzero().squeeze(-1),), (w.unsqueeze(-1) * h).sum(1))
-        return torch.cat([self.robot_node(r), self.edge_node(attended)], -1)
 
     def work(self, obs: Mapping[str, torch.Tensor]) -> torch.Tensor:
         """Encoding cost grows with the pedestrians in view (quadratically in the self-attention)."""
