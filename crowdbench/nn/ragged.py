@@ -133,6 +133,14 @@ class RaggedAttention(torch.autograd.Function):
         return torch.from_numpy(gq), torch.from_numpy(gk), torch.from_numpy(gv), None, None, None
 
 
+def row_offsets(counts: torch.Tensor) -> np.ndarray:
+    """Row boundaries ``(B + 1,)`` int64 of samples owning ``counts`` ``(B,)`` consecutive packed rows each (the
+    ``offsets`` of :func:`ragged_attention`)."""
+    offsets = np.zeros(counts.shape[0] + 1, np.int64)
+    np.cumsum(counts.numpy(), out=offsets[1:])
+    return offsets
+
+
 def ragged_attention(q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets: np.ndarray, robot_only: bool,
                      heads: int) -> torch.Tensor:
     """Attention within each sample's token rows: ``q`` ``(T, d)`` (or ``(B, d)`` when ``robot_only``), ``k``, ``v``

@@ -27,7 +27,7 @@ import torch
 import torch.nn.functional as F  # noqa: N812 - the usual alias
 from torch import nn
 
-from crowdbench.nn.ragged import ragged_attention
+from crowdbench.nn.ragged import ragged_attention, row_offsets
 from crowdbench.predictors.base import HORIZON, OBSERVED, PREDICTORS, Predictor, Track
 
 METHOD = "gst"
@@ -92,10 +92,8 @@ class GSTModel(nn.Module):
         if idx.numel() == 0:
             return hc
         x = self.embed(torch.cat([pos.reshape(n * A, 2).index_select(0, idx) / SCALE,
-                                         disp.reshape(n * A, 2).index_select(0, idx)], -1))
-        offsets = np.zeros(n + 1, np.int64)
-        np.cumsum(present.sum(-1).numpy(), out=offsets[1:])
-        z = self._attend(x, offsets)
+                                  disp.reshape(n * A, 2).index_select(0, idx)], -1))
+        z = self._attend(x, row_offsets(present.sum(-1)))
         h, c = self.temporal(z, (hc[0].index_select(0, idx), hc[1].index_select(0, idx)))
         return hc[0].index_copy(0, idx, h), hc[1].index_copy(0, idx, c)
 

@@ -27,12 +27,11 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
 import torch
 import torch.nn.functional as F  # noqa: N812 - the usual alias
 from torch import nn
 
-from crowdbench.nn.ragged import ragged_attention
+from crowdbench.nn.ragged import ragged_attention, row_offsets
 from crowdbench.policies.nets import RecurrentCell, RecurrentTrunkActor, check_action_std, gaussian_cfg
 
 
@@ -168,9 +167,8 @@ class AIGActor(RecurrentTrunkActor):
         return torch.cat([self.robot_node(r), self.edge_node(attended)], -1)
 
     def _pool_packed(self, humans: torch.Tensor, m: torch.Tensor, r: torch.Tensor) -> torch.Tensor:
-        counts = m.sum(-1)  # (R,) pedestrians in view per row, nearest first: row b owns packed rows
-        offsets = np.zeros(m.shape[0] + 1, np.int64)  # offsets[b]:offsets[b+1]
-        np.cumsum(counts.numpy(), out=offsets[1:])
+        counts = m.sum(-1)  # (R,) pedestrians in view per row, nearest first
+        offsets = row_offsets(counts)  # row b owns packed rows offsets[b]:offsets[b+1]
         e = self.edge_embed(humans[m])  # (P, W) packed
         W = e.shape[-1]
         qkv = self._qkv(e)  # (P, 3W)
