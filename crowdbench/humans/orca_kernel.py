@@ -318,44 +318,6 @@ def _obstacle_lines(px, py, vx, vy, r, th_obst, max_speed, opoint, onext, oprev,
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy")
-def _nearest(cand_d, cand_idx, m, k_max, nb_d, nb_idx):
-    """The ``k_max`` nearest of ``m`` candidates (squared distances ``cand_d``, agent indices ``cand_idx`` ascending),
-    sorted by distance, ties in index order — RVO2's ``insertAgentNeighbor`` result. Written to ``nb_d``/``nb_idx``
-    (length ≥ ``m`` + 1: the last slot takes the discarded); returns their count.
-
-    Up to 48 candidates each one's rank is counted without branches (O(m²) compares the compiler vectorises,
-    3–4× faster than insertion at 20 agents, whose data-dependent branches mispredict); beyond, insertion into
-    the sorted prefix with the cut-off shrinking to the k-th distance (RVO2's own procedure) wins.
-    """
-    cnt = min(m, k_max)
-    if m <= 48:
-        discard = nb_d.shape[0] - 1
-        for p in range(m):
-            dp = cand_d[p]
-            rank = 0
-            for q in range(m):
-                rank += (cand_d[q] < dp) | ((cand_d[q] == dp) & (q < p))
-            slot = rank if rank < cnt else discard
-            nb_d[slot], nb_idx[slot] = dp, cand_idx[p]
-        return cnt
-    c = 0
-    range_sq = np.inf
-    for p in range(m):
-        dsq = cand_d[p]
-        if dsq < range_sq:
-            if c < k_max:
-                c += 1
-            k = c - 1
-            while k != 0 and dsq < nb_d[k - 1]:
-                nb_d[k], nb_idx[k] = nb_d[k - 1], nb_idx[k - 1]
-                k -= 1
-            nb_d[k], nb_idx[k] = dsq, cand_idx[p]
-            if c == k_max:
-                range_sq = nb_d[c - 1]
-    return cnt
-
-
-@nb.njit(cache=True, inline="always", error_model="numpy")
 def _insert_nearest(nb_d, nb_idx, cnt, k_max, dsq, j):  # pragma: no cover - numba
     """Insert candidate ``j`` (squared distance ``dsq``) into the sorted ``k_max``-nearest list (order: distance,
     then index — the brute-force order); returns the new count."""
@@ -415,19 +377,56 @@ def _build_grid(pos, active, b, max_cell, per_cell, cell_start, cell_of, sx, sy,
     cell_start[0] = 0
 
 
+RANK_MAX = 64
+"""Up to this many candidates :func:`_select` ranks them without branches; beyond, it inserts them one by one."""
+
+
 @nb.njit(cache=True, inline="always", error_model="numpy")
 def _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):  # pragma: no cover - numba
-    """:func:`_nearest` for candidates in any order: the ``k_max`` smallest (distance, index) pairs, sorted, into
-    ``nb_d``/``nb_idx`` (length ≥ ``m`` + 1); returns their count. Branch-free ranks up to 48 candidates (``rank``:
-    scratch of 48), else insertion."""
+    """The ``k_max`` smallest (distance, index) pairs of ``m`` candidates in any order (squared distances ``cand_d``,
+    agent indices ``cand_idx``), sorted — RVO2's ``insertAgentNeighbor`` result: distance, equal distances in index
+    order. Written to ``nb_d``/``nb_idx`` (length ≥ ``m`` + 1: the last slot takes the discarded); returns their
+    count. ``cand_*`` need 7 spare slots (the padding), ``rank`` (scratch) ``RANK_MAX`` slots.
+
+    Up to ``RANK_MAX`` candidates each one's rank is counted without branches: the strict ranks of eight candidates
+    at a time, held in registers while every candidate is compared with them (vector compares; 3–4× faster than
+    insertion at 20 candidates, whose data-dependent branches mispredict). Distinct distances give ranks
+    0, …, m − 1 (sum m(m − 1)/2); equal distances share one and lower the sum, and only then are the ranks counted
+    again with the index breaking ties. Beyond, insertion into the sorted prefix with the cut-off shrinking to the
+    k-th distance (RVO2's own procedure) wins.
+    """
     cnt = min(m, k_max)
-    if m <= 48:
+    if m <= RANK_MAX:
         discard = nb_d.shape[0] - 1
-        rank[:m] = 0
-        for q in range(m):  # inner loop over p: vectorised, the ranks stay in registers
-            dq, iq = cand_d[q], cand_idx[q]
+        mp = (m + 7) & ~7
+        for p in range(m, mp):
+            cand_d[p] = np.inf
+        for p0 in range(0, mp, 8):
+            d0, d1, d2, d3 = cand_d[p0], cand_d[p0 + 1], cand_d[p0 + 2], cand_d[p0 + 3]
+            d4, d5, d6, d7 = cand_d[p0 + 4], cand_d[p0 + 5], cand_d[p0 + 6], cand_d[p0 + 7]
+            r0 = r1 = r2 = r3 = r4 = r5 = r6 = r7 = 0
+            for q in range(m):
+                dq = cand_d[q]
+                r0 += dq < d0
+                r1 += dq < d1
+                r2 += dq < d2
+                r3 += dq < d3
+                r4 += dq < d4
+                r5 += dq < d5
+                r6 += dq < d6
+                r7 += dq < d7
+            rank[p0], rank[p0 + 1], rank[p0 + 2], rank[p0 + 3] = r0, r1, r2, r3
+            rank[p0 + 4], rank[p0 + 5], rank[p0 + 6], rank[p0 + 7] = r4, r5, r6, r7
+        total = 0
+        for p in range(m):
+            total += rank[p]
+        if total != m * (m - 1) // 2:  # equal distances: rank again, the index breaking ties
             for p in range(m):
-                rank[p] += (dq < cand_d[p]) | ((dq == cand_d[p]) & (iq < cand_idx[p]))
+                rank[p] = 0
+            for q in range(m):
+                dq, iq = cand_d[q], cand_idx[q]
+                for p in range(m):
+                    rank[p] += (dq < cand_d[p]) | ((dq == cand_d[p]) & (iq < cand_idx[p]))
         for p in range(m):
             slot = rank[p] if rank[p] < cnt else discard
             nb_d[slot], nb_idx[slot] = cand_d[p], cand_idx[p]
@@ -467,7 +466,7 @@ def _scan(i, skip, px, py, range_sq, k_max, sx, sy, sidx, t0, t1, nb_d, nb_idx, 
 
 @nb.njit(cache=True, inline="always", error_model="numpy")
 def _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx, rank, nb_d,
-                  nb_idx):  # pragma: no cover - numba
+                  nb_idx, near_d, near_idx):  # pragma: no cover - numba
     """The ``k_max`` nearest active agents (not ``i``, not ``skip``) strictly within ``range_sq`` of point
     (``px``, ``py``) on :func:`_build_grid`'s cells — exactly the set and order of the brute-force search (distance,
     then index), whatever order the candidates come in. Returns their count.
@@ -520,9 +519,7 @@ def _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, ge
                 m = _gather(i, skip, px, py, range_sq, sx, sy, sidx, cell_start[row + nx0], cell_start[row + nx1 + 1],
                             cand_d, cand_idx, m)
         x0, x1, y0, y1 = nx0, nx1, ny0, ny1
-    cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
-    bound = nb_d[cnt - 1]
-    # done if the disc of radius sqrt(bound) lies within the square (its sides with cells beyond)
+    # agents outside the square are at least `lower` away (its nearest side with cells beyond)
     lower = np.inf
     if x0 > 0:
         lower = min(lower, px - (minx + x0 * c))
@@ -533,8 +530,17 @@ def _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, ge
     if y1 < ny - 1:
         lower = min(lower, miny + (y1 + 1) * c - py)
     lower = max(lower - eps, 0.0)
-    if lower * lower > bound:
-        return cnt
+    inner = lower * lower
+    if inner >= range_sq:  # the whole range lies in the square
+        return _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+    q = 0  # the candidates inside the square's inscribed disc: if k_max of them, the nearest are theirs (fewer to rank)
+    for p in range(m):
+        near_d[q], near_idx[q] = cand_d[p], cand_idx[p]
+        q += cand_d[p] < inner
+    if q >= k_max:
+        return _select(near_d, near_idx, q, k_max, nb_d, nb_idx, rank)
+    cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+    bound = nb_d[cnt - 1]  # beyond `lower`: rows of cells outside the square that the disc of sqrt(bound) reaches
     # every agent beyond the disc is out; rows and columns widened by the rounding slack
     reach = np.sqrt(bound) + eps
     r0 = min(max(int(np.floor((py - reach - miny) * inv_c)), 0), ny - 1)
@@ -604,7 +610,9 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
     res = np.empty(2)
     cand_idx = np.empty(A + 8, np.int64)  # + 8: the spare slot of _gather, the padding of _select
     cand_d = np.empty(A + 8)
-    nb_idx = np.empty(A + 1, np.int64)  # + 1: the discard slot of _nearest
+    near_idx = np.empty(A + 8, np.int64)
+    near_d = np.empty(A + 8)
+    nb_idx = np.empty(A + 1, np.int64)  # + 1: the discard slot of _select
     nb_d = np.empty(A + 1)
     ob_idx = np.empty(V + 1, np.int64)
     ob_d = np.empty(V + 1)
@@ -615,7 +623,7 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
     sy = np.empty(A)
     sidx = np.empty(A, np.int64)
     geo = np.empty(7)
-    rank = np.empty(48, np.int64)
+    rank = np.empty(RANK_MAX, np.int64)
     for b in range(B):
         for j in range(A):
             if active[b, j] and not (np.isfinite(pos[b, j, 0]) and np.isfinite(pos[b, j, 1])):
@@ -653,7 +661,7 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
             skip = ignore[b, i]
             if k_max > 0 and use_grid:
                 cnt = _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx,
-                                    rank, nb_d, nb_idx)
+                                    rank, nb_d, nb_idx, near_d, near_idx)
             elif k_max > 0:
                 m = 0
                 for j in range(A):
@@ -663,7 +671,7 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
                     if dsq < range_sq:
                         cand_d[m], cand_idx[m] = dsq, j
                         m += 1
-                cnt = _nearest(cand_d, cand_idx, m, k_max, nb_d, nb_idx)
+                cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
             inv_th = 1.0 / time_horizon[b, i]
             for k in range(cnt):
                 j = nb_idx[k]

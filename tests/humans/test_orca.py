@@ -184,18 +184,21 @@ def test_orca_pedestrians_avoid_world_walls():
         assert d.min() >= 0.3 - 1e-6  # ORCA's obstacle lines keep them off the box (the clamp never needed)
 
 
-@pytest.mark.parametrize("m", [0, 1, 7, 20, 48, 49, 120])
+@pytest.mark.parametrize("m", [0, 1, 7, 8, 9, 20, 63, 64, 65, 120])
 @pytest.mark.parametrize("k_max", [1, 5, 10, 30, 200])
-def test_neighbour_selection_is_rvo2s(m, k_max):
-    """The kernel's neighbour selection (branch-free ranks up to 48 candidates, insertion beyond) keeps RVO2's
-    result: the ``k_max`` smallest squared distances ascending, equal distances in agent-index order."""
-    from crowdbench.humans.orca_kernel import _nearest
+@pytest.mark.parametrize("ties", [True, False])
+def test_neighbour_selection_is_rvo2s(m, k_max, ties):
+    """The kernel's neighbour selection (branch-free ranks up to ``RANK_MAX`` candidates, insertion beyond), given
+    candidates in any order, keeps RVO2's result: the ``k_max`` smallest squared distances ascending, equal
+    distances in agent-index order."""
+    from crowdbench.humans.orca_kernel import RANK_MAX, _select
 
-    rng = np.random.default_rng(m * 1000 + k_max)
-    d = rng.integers(0, 6, m).astype(np.float64) * 0.5  # many exact ties
-    idx = np.sort(rng.choice(500, m, replace=False)).astype(np.int64)
+    rng = np.random.default_rng(m * 1000 + k_max + ties)
+    d = rng.integers(0, 6, m) * 0.5 if ties else rng.uniform(0, 100, m)  # many exact ties, or none
+    idx = rng.choice(500, m, replace=False).astype(np.int64)  # any order
+    cand_d, cand_idx = np.append(d, np.full(8, -7.0)), np.append(idx, np.full(8, -7))
     nb_d, nb_idx = np.full(m + 1, -1.0), np.full(m + 1, -1, np.int64)
-    cnt = _nearest(d, idx, m, k_max, nb_d, nb_idx)
+    cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, np.zeros(RANK_MAX, np.int64))
     want = sorted(zip(d.tolist(), idx.tolist(), strict=True))[:k_max]
     assert cnt == len(want)
     assert list(zip(nb_d[:cnt].tolist(), nb_idx[:cnt].tolist(), strict=True)) == want
