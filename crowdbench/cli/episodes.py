@@ -184,8 +184,8 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--checkpoint", default=None, help="checkpoint of a checkpoint-backed policy")
     p.add_argument("--gif", default="demo.gif", help="output GIF path")
     p.add_argument("--png", default=None, help="also write the episode's middle frame as a PNG (docs/demo.png: "
-                                               "`crowdbench demo --responsiveness 0.5 --gif docs/demo.gif --png "
-                                               "docs/demo.png`)")
+                                               "`crowdbench demo --policy h2int --responsiveness 0.5 --gif "
+                                               "docs/demo.gif --png docs/demo.png`)")
     p.set_defaults(func=demo)
     p = sub.add_parser("render", help="one episode of any policy as an animated GIF (same as demo, policy first)")
     _common(p)
