@@ -10,6 +10,17 @@ from collections.abc import Sequence
 import numba as nb
 import numpy as np
 
+from crowdbench.spatial import (
+    GRID_MIN,
+    GRID_PER_CELL,
+    build_grid,
+    count_members,
+    disc_row_span,
+    disc_rows,
+    finite_world,
+    grid_scratch,
+)
+
 Polygon = Sequence[tuple[float, float]]
 
 
@@ -117,14 +128,42 @@ def swept_pair_min_distance(rel_p0: np.ndarray, rel_disp: np.ndarray) -> np.ndar
 
 
 @nb.njit(cache=True)
-def pair_overlaps(pos: np.ndarray, radius: np.ndarray, active: np.ndarray) -> np.ndarray:  # pragma: no cover
-    """Overlapping pairs per world: ``pos`` ``(B, A, 2)``, ``radius`` ``(B, A)``, ``active`` ``(B, A)`` bool →
-    ``(B,)`` int64 counts of pairs ``i < j``, both active, with centre distance² < (r_i + r_j)² (the same float
-    operations as the broadcast numpy form, without its ``(B, A, A)`` temporaries)."""
+def pair_overlaps(pos: np.ndarray, radius: np.ndarray, active: np.ndarray,
+                  grid_min: int = GRID_MIN) -> np.ndarray:  # pragma: no cover
+    """Overlapping pairs per world: ``pos`` ``(B, A, 2)`` [m], ``radius`` ``(B, A)`` [m], ``active`` ``(B, A)`` bool
+    → ``(B,)`` int64 counts of pairs ``i < j``, both active, with centre distance² < (r_i + r_j)² (the same float
+    operations as the broadcast numpy form, without its ``(B, A, A)`` temporaries). A world with more than
+    ``grid_min`` active agents visits, for each ``i``, only the agents of the cells within ``r_i + r_max`` of it
+    (:mod:`crowdbench.spatial`): the same pairs, the same test, the same count."""
     B, A = radius.shape
     out = np.zeros(B, dtype=np.int64)
+    cell_start, cell_of, sx, sy, sidx, geo = grid_scratch(A)
     for b in range(B):
         n = 0
+        if count_members(active, b, 0) > grid_min and finite_world(pos, b):
+            r_max = 0.0
+            for j in range(A):
+                if active[b, j]:
+                    r_max = max(r_max, radius[b, j])
+            build_grid(pos, active, b, max(2.0 * r_max, 1e-3), GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx,
+                       geo)
+            for i in range(A):
+                if not active[b, i]:
+                    continue
+                px, py, ri = pos[b, i, 0], pos[b, i, 1], radius[b, i]
+                reach = ri + r_max
+                r0, r1 = disc_rows(py, reach, geo)
+                for gy in range(r0, r1 + 1):
+                    t0, t1 = disc_row_span(gy, px, py, reach, geo, cell_start)
+                    for t in range(t0, t1):
+                        j = sidx[t]
+                        if j > i:
+                            dx = px - sx[t]
+                            dy = py - sy[t]
+                            rr = ri + radius[b, j]
+                            n += dx * dx + dy * dy < rr * rr
+            out[b] = n
+            continue
         for i in range(A):
             if not active[b, i]:
                 continue

@@ -101,15 +101,15 @@ POLICY_INFRA = {"base", "method", "classic", "nets", "recurrent"}
 and ``recurrent_training``, the PPO bindings' shared base)."""
 LAYERS: dict[str, set[str]] = {
     # unit → the crowdbench units it may import (a unit: a sub-package, or a top-level module)
-    "validate": set(), "io": set(), "geometry": set(), "progress": set(), "nn": set(),
+    "validate": set(), "io": set(), "spatial": set(), "geometry": {"spatial"}, "progress": set(), "nn": set(),
     "registry": {"validate"},
     "config": {"validate"},
     "checkpoints": {"io", "registry"},
     "metrics": set(),
     "render": {"io"},
     "datasets": {"humans"},  # ETH/UCY validation runs the pedestrian models
-    "humans": {"datasets", "geometry", "registry", "validate"},
-    "worlds": {"config", "datasets", "geometry", "humans", "registry"},
+    "humans": {"datasets", "geometry", "registry", "spatial", "validate"},
+    "worlds": {"config", "datasets", "geometry", "humans", "registry", "spatial"},
     "robots": {"config", "registry", "worlds"},
     "predictors": {"__version__", "checkpoints", "config", "io", "nn", "registry", "robots", "worlds"},
     "policies": {"checkpoints", "config", "humans", "io", "nn", "registry", "robots"},

@@ -82,7 +82,7 @@ class CrowdMARLEnv:
         w = self.world
         agent_observations_batch(w.pos, w.vel, w.goal, w.radius, w.v_pref, w.heading, w.active,
                                  self.config.human_sensing_range, self.config.robot_visible, self._me, self._nb,
-                                 self._mask)
+                                 self._mask, w.grid_min)
         B, A = self._me.shape[:2]
         flat = np.concatenate([self._me, self._nb.reshape(B, A, -1), self._mask], axis=2)
         return flat[:, self._first:]

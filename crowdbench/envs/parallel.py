@@ -90,6 +90,16 @@ def check_normalised(agent: str, action: np.ndarray) -> np.ndarray:
     return np.clip(a, -1.0, 1.0)
 
 
+def _columns(values: dict[str, np.ndarray], names: list[str], slots: np.ndarray):
+    """Per slot of ``slots`` ``(n,)``, a tuple of ``values[name][0, slot]`` over ``names`` as Python scalars of the
+    arrays' common dtype (what ``np.stack(...).tolist()`` gives, without building the rows in numpy): one list per
+    name, zipped (the per-agent dicts are then built in comprehensions, the agent-steps' only Python)."""
+    if not names:
+        return ()
+    dtype = np.result_type(*(values[k] for k in names))
+    return zip(*[values[k][0, slots].astype(dtype, copy=False).tolist() for k in names], strict=True)
+
+
 class CrowdParallelEnv(ParallelEnv):
     """See the module docstring."""
 
@@ -331,7 +341,8 @@ class CrowdParallelEnv(ParallelEnv):
             me, nb, mask = np.empty((1, A, 9), np.float32), np.empty((1, A, n, 5), np.float32), \
                 np.empty((1, A, n), np.float32)
             agent_observations_batch(w.pos, w.vel, w.goal, w.radius, w.v_pref, w.heading, w.active,
-                                     self.config.human_sensing_range, self.config.robot_visible, me, nb, mask)
+                                     self.config.human_sensing_range, self.config.robot_visible, me, nb, mask,
+                                     w.grid_min)
             flat = np.concatenate([me[0], nb[0].reshape(A, -1), mask[0]], axis=1)
             rows = {"robot": 0, **{f"human_{i}": i + 1 for i in range(w.num_humans)}}
             return {a: flat[rows[a]] if a not in self._done else np.zeros_like(flat[0]) for a in self.agents}
@@ -348,18 +359,17 @@ class CrowdParallelEnv(ParallelEnv):
                      terms: dict[str, np.ndarray]) -> dict[str, dict[str, Any]]:
         """Per live pedestrian (slots ``slots``): the model's analysis values (``crowd``: arrays ``(B, H)``) and, with
         a pedestrian reward, its named terms (``reward_terms``)."""
-        n = len(humans)
         cnames, tnames = list(crowd), list(terms)
-        crows = np.stack([crowd[k][0, slots] for k in cnames], 1).tolist() if cnames else [()] * n
-        trows = np.stack([terms[k][0, slots] for k in tnames], 1).tolist() if tnames else None
-        if trows is None:
+        crows = _columns(crowd, cnames, slots)
+        if not tnames:
+            if not cnames:
+                return {a: {} for a in humans}
             return {a: dict(zip(cnames, c, strict=True)) for a, c in zip(humans, crows, strict=True)}
-        infos: dict[str, dict[str, Any]] = {}
-        for agent, c, t in zip(humans, crows, trows, strict=True):
-            info = dict(zip(cnames, c, strict=True))
-            info["reward_terms"] = dict(zip(tnames, t, strict=True))
-            infos[agent] = info
-        return infos
+        trows = _columns(terms, tnames, slots)
+        if not cnames:
+            return {a: {"reward_terms": dict(zip(tnames, t, strict=True))} for a, t in zip(humans, trows, strict=True)}
+        return {a: {**dict(zip(cnames, c, strict=True)), "reward_terms": dict(zip(tnames, t, strict=True))}
+                for a, c, t in zip(humans, crows, trows, strict=True)}
 
     def state(self) -> np.ndarray:
         """Global state ``(A * 7,)``: per agent [px, py, vx, vy, gx, gy, r] (robot first; padding slots parked)."""

@@ -6,7 +6,8 @@ Source of truth: the reference C++ library, RVO2 2.0.x (``Agent::computeNeighbor
 * computed in float64 (the C++ library uses float32; see ``tests/data/README.md`` for the tolerances this meets);
 * agent neighbours are found by brute force in small crowds and on a grid of cells above ``GRID_MIN`` agents
   (the cells around an agent ranked, then the rows of cells that the k-th distance still reaches — RVO2's kd-tree
-  query with its shrinking range, on cells), obstacle edges by brute force. The result is the same set — the
+  query with its shrinking range, on cells; the cell lists and the ranking are :mod:`crowdbench.spatial`'s, shared
+  with the world's kernels), obstacle edges by brute force. The result is the same set — the
   ``max_neighbors`` nearest agents strictly within ``neighbor_dist`` sorted by squared distance, and the obstacle
   edges within ``time_horizon_obst * max_speed + radius`` seen from their right side — only exact distance *ties*
   may be ordered differently (RVO2 keeps kd-tree visiting order; here it is index order, on either path: the grid
@@ -26,6 +27,11 @@ from collections.abc import Sequence
 
 import numba as nb
 import numpy as np
+
+from crowdbench.spatial import RANK_MAX
+from crowdbench.spatial import build_grid as _build_grid
+from crowdbench.spatial import insert_nearest as _insert_nearest
+from crowdbench.spatial import select_nearest as _select
 
 RVO_EPSILON = 1e-5
 
@@ -315,126 +321,6 @@ def _obstacle_lines(px, py, vx, vy, r, th_obst, max_speed, opoint, onext, oprev,
             lp[n, 0], lp[n, 1] = rcx + r * inv_th * (-dy), rcy + r * inv_th * dx
             n += 1
     return n
-
-
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def _insert_nearest(nb_d, nb_idx, cnt, k_max, dsq, j):  # pragma: no cover - numba
-    """Insert candidate ``j`` (squared distance ``dsq``) into the sorted ``k_max``-nearest list (order: distance,
-    then index — the brute-force order); returns the new count."""
-    if cnt == k_max and not (dsq < nb_d[cnt - 1] or (dsq == nb_d[cnt - 1] and j < nb_idx[cnt - 1])):
-        return cnt
-    k = cnt if cnt < k_max else cnt - 1
-    while k > 0 and (dsq < nb_d[k - 1] or (dsq == nb_d[k - 1] and j < nb_idx[k - 1])):
-        nb_d[k], nb_idx[k] = nb_d[k - 1], nb_idx[k - 1]
-        k -= 1
-    nb_d[k], nb_idx[k] = dsq, j
-    return cnt + 1 if cnt < k_max else cnt
-
-
-@nb.njit(cache=True, error_model="numpy")
-def _build_grid(pos, active, b, max_cell, per_cell, cell_start, cell_of, sx, sy, sidx, geo):  # pragma: no cover
-    """Cell lists of world ``b``'s active agents (counting sort), cells row by row (``k = gy·nx + gx``): the agents
-    of cell ``k`` are ``sidx[cell_start[k]:cell_start[k + 1]]`` in index order, at ``(sx, sy)`` (copies of their
-    positions, so that a row of cells is one contiguous run of memory). ``geo`` (out): min x, min y, cell size, nx,
-    ny, slack, 1 / cell size. The cell size gives about ``per_cell`` agents per cell on average, at most
-    ``max_cell`` [m] (half the neighbour range: sparse or ring-shaped crowds still get small cells), with at most
-    ``len(cell_start) − 1`` cells; ``slack`` [m] bounds how far rounding may put an agent outside its cell.
-    ``cell_of`` (scratch, length A): each agent's cell."""
-    A = pos.shape[1]
-    minx = miny = np.inf
-    maxx = maxy = -np.inf
-    n = 0
-    for j in range(A):
-        if active[b, j]:
-            x, y = pos[b, j, 0], pos[b, j, 1]
-            minx, maxx, miny, maxy = min(minx, x), max(maxx, x), min(miny, y), max(maxy, y)
-            n += 1
-    w, h = max(maxx - minx, 1e-6), max(maxy - miny, 1e-6)
-    c = max(min(np.sqrt(w * h / max(n, 1) * per_cell), max_cell), 1e-3)
-    cap = cell_start.shape[0] - 1
-    while (int(w / c) + 1) * (int(h / c) + 1) > cap:
-        c *= 1.25
-    nx, ny = int(w / c) + 1, int(h / c) + 1
-    geo[0], geo[1], geo[2], geo[3], geo[4] = minx, miny, c, nx, ny
-    geo[5] = 1e-9 * (1.0 + abs(minx) + abs(miny) + w + h + c)
-    geo[6] = 1.0 / c
-    cell_start[: nx * ny + 1] = 0
-    for j in range(A):
-        if active[b, j]:
-            k = min(int((pos[b, j, 1] - miny) / c), ny - 1) * nx + min(int((pos[b, j, 0] - minx) / c), nx - 1)
-            cell_of[j] = k
-            cell_start[k + 1] += 1
-    for k in range(nx * ny):
-        cell_start[k + 1] += cell_start[k]
-    for j in range(A):  # ascending j: each cell lists its agents in index order; cell_start[k] ends at k + 1's start
-        if active[b, j]:
-            k = cell_of[j]
-            t = cell_start[k]
-            sx[t], sy[t], sidx[t] = pos[b, j, 0], pos[b, j, 1], j
-            cell_start[k] = t + 1
-    for k in range(nx * ny, 0, -1):
-        cell_start[k] = cell_start[k - 1]
-    cell_start[0] = 0
-
-
-RANK_MAX = 64
-"""Up to this many candidates :func:`_select` ranks them without branches; beyond, it inserts them one by one."""
-
-
-@nb.njit(cache=True, inline="always", error_model="numpy")
-def _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):  # pragma: no cover - numba
-    """The ``k_max`` smallest (distance, index) pairs of ``m`` candidates in any order (squared distances ``cand_d``,
-    agent indices ``cand_idx``), sorted — RVO2's ``insertAgentNeighbor`` result: distance, equal distances in index
-    order. Written to ``nb_d``/``nb_idx`` (length ≥ ``m`` + 1: the last slot takes the discarded); returns their
-    count. ``cand_*`` need 7 spare slots (the padding), ``rank`` (scratch) ``RANK_MAX`` slots.
-
-    Up to ``RANK_MAX`` candidates each one's rank is counted without branches: the strict ranks of eight candidates
-    at a time, held in registers while every candidate is compared with them (vector compares; 3–4× faster than
-    insertion at 20 candidates, whose data-dependent branches mispredict). Distinct distances give ranks
-    0, …, m − 1 (sum m(m − 1)/2); equal distances share one and lower the sum, and only then are the ranks counted
-    again with the index breaking ties. Beyond, insertion into the sorted prefix with the cut-off shrinking to the
-    k-th distance (RVO2's own procedure) wins.
-    """
-    cnt = min(m, k_max)
-    if m <= RANK_MAX:
-        discard = nb_d.shape[0] - 1
-        mp = (m + 7) & ~7
-        for p in range(m, mp):
-            cand_d[p] = np.inf
-        for p0 in range(0, mp, 8):
-            d0, d1, d2, d3 = cand_d[p0], cand_d[p0 + 1], cand_d[p0 + 2], cand_d[p0 + 3]
-            d4, d5, d6, d7 = cand_d[p0 + 4], cand_d[p0 + 5], cand_d[p0 + 6], cand_d[p0 + 7]
-            r0 = r1 = r2 = r3 = r4 = r5 = r6 = r7 = 0
-            for q in range(m):
-                dq = cand_d[q]
-                r0 += dq < d0
-                r1 += dq < d1
-                r2 += dq < d2
-                r3 += dq < d3
-                r4 += dq < d4
-                r5 += dq < d5
-                r6 += dq < d6
-                r7 += dq < d7
-            rank[p0], rank[p0 + 1], rank[p0 + 2], rank[p0 + 3] = r0, r1, r2, r3
-            rank[p0 + 4], rank[p0 + 5], rank[p0 + 6], rank[p0 + 7] = r4, r5, r6, r7
-        total = 0
-        for p in range(m):
-            total += rank[p]
-        if total != m * (m - 1) // 2:  # equal distances: rank again, the index breaking ties
-            for p in range(m):
-                rank[p] = 0
-            for q in range(m):
-                dq, iq = cand_d[q], cand_idx[q]
-                for p in range(m):
-                    rank[p] += (dq < cand_d[p]) | ((dq == cand_d[p]) & (iq < cand_idx[p]))
-        for p in range(m):
-            slot = rank[p] if rank[p] < cnt else discard
-            nb_d[slot], nb_idx[slot] = cand_d[p], cand_idx[p]
-        return cnt
-    c = 0
-    for p in range(m):
-        c = _insert_nearest(nb_d, nb_idx, c, k_max, cand_d[p], cand_idx[p])
-    return cnt
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy")

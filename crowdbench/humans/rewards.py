@@ -53,7 +53,8 @@ def clearance(world) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
     B, H = world.num_worlds, world.num_humans
     near, ped, robot = np.empty((B, H)), np.empty((B, H), bool), np.empty((B, H), bool)
-    crowd_clearance(world.pos, world.radius, world.active, bool(world.config.robot_visible), near, ped, robot)
+    crowd_clearance(world.pos, world.radius, world.active, bool(world.config.robot_visible), near, ped, robot,
+                    world.grid_min)
     return near, ped, robot
 
 

@@ -259,7 +259,7 @@ def human_observations(world, b: int) -> dict[str, np.ndarray]:
     cfg = world.config
     me, nb, mask = _human_arrays(world.num_humans, cfg.max_humans_observed)
     human_observation(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading, world.active, b,
-                      cfg.human_sensing_range, cfg.robot_visible, me, nb, mask)
+                      cfg.human_sensing_range, cfg.robot_visible, me, nb, mask, world.grid_min)
     return {"self": me, "neighbors": nb, "mask": mask}
 
 
@@ -276,7 +276,7 @@ def agent_observations(builder: Observation, world) -> tuple[dict[str, np.ndarra
     me, nb, hmask = _human_arrays(world.num_humans, cfg.max_humans_observed)
     one_world_observations(world.pos, world.vel, world.goal, world.radius, world.v_pref, world.heading,
                            world.active, max_range, by_id, cfg.human_sensing_range, cfg.robot_visible, robot, humans,
-                           mask, me, nb, hmask)
+                           mask, me, nb, hmask, world.grid_min)
     return {"robot": robot, "humans": humans, "mask": mask}, {"self": me, "neighbors": nb, "mask": hmask}
 
 

@@ -20,6 +20,13 @@ it bit for bit (``tests/worlds/test_kernels.py``):
 * :func:`spawn_clear`, :func:`change_goals` — CrowdNav++'s spawn and goal-change clearance (reference:
   ``reference.spawn_clear``).
 
+Large crowds: the kernels whose brute force is quadratic in a world's agents — the pedestrians' observations (each
+agent's nearest neighbours), :func:`crowd_clearance`, the overlap count of :func:`outcome` — search a cell grid
+(:mod:`crowdbench.spatial`) in a world with more than ``grid_min`` (default :data:`~crowdbench.spatial.GRID_MIN`)
+agents to search, the same agents with the same float operations, ranked by (distance, index) as the brute-force
+insertion orders them: bit for bit the same outputs (``tests/worlds/test_grid.py``). The robot's observation is one
+query per world (linear) and stays brute force.
+
 Why compiled: a world step of a small crowd is a few hundred numpy calls on arrays of a handful of elements, so
 per-call overhead (≈ 1 µs each) dominated; each kernel here costs one dispatch (≈ 1–3 µs) plus its arithmetic.
 The dispatch grows with the number of array arguments (≈ 70 ns each), so :func:`advance` takes its outputs in
@@ -34,6 +41,18 @@ import numba as nb
 import numpy as np
 
 from crowdbench.geometry import pair_overlaps
+from crowdbench.spatial import (
+    GRID_MIN,
+    GRID_PER_CELL,
+    RANK_MAX,
+    build_grid,
+    count_members,
+    disc_row_span,
+    disc_rows,
+    finite_world,
+    grid_scratch,
+    select_nearest,
+)
 
 INF = np.inf
 
@@ -151,7 +170,7 @@ def motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, 
 @nb.njit(cache=True, error_model="numpy")
 def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
             max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
-            change_due):  # pragma: no cover - numba
+            change_due, grid_min=GRID_MIN):  # pragma: no cover - numba
     """Everything decided after the motion, in place.
 
     Args (``B`` worlds of ``A`` agents):
@@ -168,6 +187,8 @@ def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_mi
         terminated, truncated: Out ``(B,)`` bool: success or collision; time limit reached otherwise.
         overlaps: Out ``(B,)`` int: overlapping pedestrian pairs. reached: Out ``(B, A - 1)`` bool: pedestrians
             within one radius of their goal. change_due: Out ``(B,)`` bool: a random goal change is due.
+        grid_min: worlds with more active pedestrians count overlaps on a grid of cells
+            (:func:`~crowdbench.geometry.pair_overlaps`; the same count).
 
     Returns:
         Events as bits: 1 = a pedestrian reached its goal, 2 = a random goal change is due somewhere.
@@ -206,21 +227,21 @@ def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_mi
             reached[b, h - 1] = active[b, h] and dx * dx + dy * dy <= r * r
             if reached[b, h - 1]:
                 events |= 1
-    overlaps[:] = pair_overlaps(pos[:, 1:], radius[:, 1:], active[:, 1:])
+    overlaps[:] = pair_overlaps(pos[:, 1:], radius[:, 1:], active[:, 1:], grid_min)
     return events
 
 
 @nb.njit(cache=True, error_model="numpy")
 def advance(robot_vel, human_vel, pos, vel, v_pref, radius, active, edges, dt, iters, disp, clip_robot, goal, heading,
             steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, floats, ints, flags, reached,
-            change_due, mirror):  # pragma: no cover - numba
+            change_due, mirror, grid_min=GRID_MIN):  # pragma: no cover - numba
     """The new velocities into ``vel`` (``robot_vel`` ``(B, 2)``, ``human_vel`` ``(B, A - 1, 2)`` [m/s]), then
     :func:`motion` then :func:`outcome` in one compiled call (a world step's arithmetic), writing the step's
     figures into three blocks (fewer arguments to pass): ``floats`` ``(7, B)`` — five reward terms, reward, d_min —,
     ``ints`` ``(2, B)`` — outcome, pedestrian overlaps —, ``flags`` ``(3, B)`` bool — robot hit an obstacle,
     terminated, truncated. ``mirror`` ``(B, ≥ A, 2)``: out, the new positions again (pymunk's synchronisation
-    rows). Returns -1 when :func:`motion` refused non-finite velocities (nothing moved), else :func:`outcome`'s
-    event bits."""
+    rows). ``grid_min``: :func:`outcome`'s. Returns -1 when :func:`motion` refused non-finite velocities (nothing
+    moved), else :func:`outcome`'s event bits."""
     terms, reward, d_min, result, overlaps = floats[:5], floats[5], floats[6], ints[0], ints[1]
     robot_hit, terminated, truncated = flags[0], flags[1], flags[2]
     B, A = radius.shape
@@ -235,7 +256,7 @@ def advance(robot_vel, human_vel, pos, vel, v_pref, radius, active, edges, dt, i
             mirror[b, a, 0], mirror[b, a, 1] = pos[b, a, 0], pos[b, a, 1]
     return outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
                    max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
-                   change_due)
+                   change_due, grid_min)
 
 
 @nb.njit(cache=True, inline="always", error_model="numpy")
@@ -301,9 +322,91 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
                 humans[b, j, 2], humans[b, j, 3], humans[b, j, 4] = vel[b, h, 0], vel[b, h, 1], radius[b, h]
 
 
+
+
+OBS_MAX_CELL = 0.5
+"""Largest grid cell of the observation kernels, as a fraction of the sensing range."""
+NEAR_FACTOR = 1.6
+"""The observation kernels first search a disc expected to hold this many times as many agents as slots (from
+the local density; any value gives the same neighbours, this one is the fastest found in the concourse at
+N = 500 and 1,000)."""
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _gather_disc(pos, b, i, reach, sensing_range, cell_start, sx, sy, sidx, geo, cand_d, cand_idx):  # pragma: no cover
+    """The grid members (not ``i``) of the cells within ``reach`` [m] of agent ``i`` whose centre distance ``d`` is
+    ≤ ``sensing_range`` [m], as candidates (``d``, index) in ``cand_d``/``cand_idx`` (``(A + 8,)``), without
+    branches; returns their count. ``d`` is computed as the brute-force loop does (member minus agent ``i``)."""
+    px, py = pos[b, i, 0], pos[b, i, 1]
+    r0, r1 = disc_rows(py, reach, geo)
+    m = 0
+    for gy in range(r0, r1 + 1):
+        t0, t1 = disc_row_span(gy, px, py, reach, geo, cell_start)
+        for t in range(t0, t1):
+            dx, dy = sx[t] - px, sy[t] - py
+            d = math.sqrt(dx * dx + dy * dy)
+            j = sidx[t]
+            cand_d[m], cand_idx[m] = d, j
+            m += (d <= sensing_range) & (j != i)
+    return m
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _local_reach(px, py, want, cell_start, geo):  # pragma: no cover - numba
+    """The radius [m] of a disc around (``px``, ``py``) expected to hold ``want`` grid members, from their density
+    in the 5 × 5 cells around the point (inf when those are empty)."""
+    c, nx, ny, inv_c = geo[2], int(geo[3]), int(geo[4]), geo[6]
+    cx = int(min(max((px - geo[0]) * inv_c, 0.0), nx - 1.0))
+    cy = int(min(max((py - geo[1]) * inv_c, 0.0), ny - 1.0))
+    x0, x1, y0, y1 = max(cx - 2, 0), min(cx + 2, nx - 1), max(cy - 2, 0), min(cy + 2, ny - 1)
+    count = 0
+    for gy in range(y0, y1 + 1):
+        count += cell_start[gy * nx + x1 + 1] - cell_start[gy * nx + x0]
+    if count == 0:
+        return np.inf
+    return math.sqrt(want * (x1 - x0 + 1) * (y1 - y0 + 1) * c * c / (math.pi * count))
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _grid_neighbors(pos, b, i, sensing_range, n, cell_start, sx, sy, sidx, geo, cand_d, cand_idx, rank, dist,
+                    idx):  # pragma: no cover - numba
+    """Agent ``i``'s ``n`` nearest grid members (not ``i``) whose centre distance ``d`` is ≤ ``sensing_range``
+    [m], sorted by (d, index) into ``dist``/``idx`` (length ≥ A + 1); returns their count: the neighbours of the
+    brute-force loop in its order (a stable insertion over ascending indices, :func:`_insert`).
+
+    First only the disc expected to hold ``NEAR_FACTOR``·n members (:func:`_local_reach`) when it is inside the
+    range: if its n-th nearest is nearer than the disc's radius (less the rounding slack), nobody outside can
+    displace one; otherwise the whole range. Candidates are gathered, then ranked
+    (:func:`~crowdbench.spatial.select_nearest`: faster than inserting them as they come, and order-free).
+    ``cand_*`` ``(A + 8,)``, ``rank`` ``(RANK_MAX,)``: scratch."""
+    near = _local_reach(pos[b, i, 0], pos[b, i, 1], NEAR_FACTOR * n, cell_start, geo)
+    if near < sensing_range:
+        m = _gather_disc(pos, b, i, near, sensing_range, cell_start, sx, sy, sidx, geo, cand_d, cand_idx)
+        cnt = select_nearest(cand_d, cand_idx, m, n, dist, idx, rank)
+        if cnt == n and dist[n - 1] < near - 2.0 * geo[5]:
+            return cnt
+    m = _gather_disc(pos, b, i, sensing_range, sensing_range, cell_start, sx, sy, sidx, geo, cand_d, cand_idx)
+    return select_nearest(cand_d, cand_idx, m, n, dist, idx, rank)
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _observation_grid(pos, active, b, sensing_range, robot_visible, n, grid_min, grid):  # pragma: no cover - numba
+    """Build world ``b``'s grid of observable agents (active; the robot only when ``robot_visible``) into
+    ``grid`` (:func:`~crowdbench.spatial.grid_scratch`) when there are more than ``grid_min`` of them, the world's
+    positions are finite and ``n`` slots and a range (≥ 0) are asked for; returns whether it did."""
+    first = 0 if robot_visible else 1
+    members = count_members(active, b, first)
+    if not (n > 0 and sensing_range >= 0.0 and members > grid_min and finite_world(pos, b)):
+        return False
+    cell_start, cell_of, sx, sy, sidx, geo = grid
+    build_grid(pos, active, b, OBS_MAX_CELL * sensing_range, GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx, geo,
+               first)
+    return True
+
+
 @nb.njit(cache=True, error_model="numpy")
 def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, sensing_range, robot_visible, me,
-                      neighbors, mask):  # pragma: no cover - numba
+                      neighbors, mask, grid_min=GRID_MIN):  # pragma: no cover - numba
     """Every pedestrian slot's own observation of world ``world``, in place.
 
     Args (``B`` worlds of ``A`` agents, ``H = A - 1`` pedestrians, ``n`` observed slots):
@@ -315,24 +418,33 @@ def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, se
         neighbors: Out ``(H, n, 5)`` float32: (Δx, Δy, vx, vy, r) of the nearest agents (ties by index),
             zero-padded.
         mask: Out ``(H, n)`` float32.
+        grid_min: with more observable agents than this the neighbours are found on a grid of cells
+            (:mod:`crowdbench.spatial`, near-linear in the crowd), else by brute force — the same bits either way.
 
     """
-    pos, vel, goal, radius, v_pref = pos[world], vel[world], goal[world], radius[world], v_pref[world]
-    heading, active = heading[world], active[world]
-    A = radius.shape[0]
+    A = radius.shape[1]
     n = neighbors.shape[1]
-    dist = np.empty(max(n, 1))
-    idx = np.empty(max(n, 1), np.int64)
+    grid = grid_scratch(A)
+    use_grid = _observation_grid(pos, active, world, sensing_range, robot_visible, n, grid_min, grid)
+    cell_start, _, sx, sy, sidx, geo = grid
+    cand_d, cand_idx = np.empty(A + 8), np.empty(A + 8, np.int64)
+    rank = np.empty(RANK_MAX, np.int64)
+    dist = np.empty(A + 1 if use_grid else max(n, 1))
+    idx = np.empty(A + 1 if use_grid else max(n, 1), np.int64)
+    b = world
     for i in range(1, A):
         m = me[i - 1]
-        m[0], m[1], m[2], m[3] = pos[i, 0], pos[i, 1], vel[i, 0], vel[i, 1]
-        m[4], m[5], m[6], m[7], m[8] = goal[i, 0], goal[i, 1], radius[i], v_pref[i], heading[i]
+        m[0], m[1], m[2], m[3] = pos[b, i, 0], pos[b, i, 1], vel[b, i, 0], vel[b, i, 1]
+        m[4], m[5], m[6], m[7], m[8] = goal[b, i, 0], goal[b, i, 1], radius[b, i], v_pref[b, i], heading[b, i]
         count = 0
-        if n > 0:
+        if use_grid:
+            count = _grid_neighbors(pos, b, i, sensing_range, n, cell_start, sx, sy, sidx, geo, cand_d, cand_idx,
+                                    rank, dist, idx)
+        elif n > 0:
             for j in range(A):
-                dx, dy = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1]
+                dx, dy = pos[b, j, 0] - pos[b, i, 0], pos[b, j, 1] - pos[b, i, 1]
                 d = math.sqrt(dx * dx + dy * dy)
-                if active[j] and d <= sensing_range and j != i and (j > 0 or robot_visible):
+                if active[b, j] and d <= sensing_range and j != i and (j > 0 or robot_visible):
                     count = _insert(dist, idx, count, n, d, j)
         neighbors[i - 1] = 0.0
         mask[i - 1] = 0.0
@@ -340,25 +452,31 @@ def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, se
             j = idx[s]
             mask[i - 1, s] = 1.0
             f = neighbors[i - 1, s]
-            f[0], f[1] = pos[j, 0] - pos[i, 0], pos[j, 1] - pos[i, 1]
-            f[2], f[3], f[4] = vel[j, 0], vel[j, 1], radius[j]
+            f[0], f[1] = pos[b, j, 0] - pos[b, i, 0], pos[b, j, 1] - pos[b, i, 1]
+            f[2], f[3], f[4] = vel[b, j, 0], vel[b, j, 1], radius[b, j]
 
 
 @nb.njit(cache=True, error_model="numpy")
 def agent_observations_batch(pos, vel, goal, radius, v_pref, heading, active, sensing_range, robot_visible, me,
-                             neighbors, mask):  # pragma: no cover - numba
+                             neighbors, mask, grid_min=GRID_MIN):  # pragma: no cover - numba
     """Every agent's own observation in every world — the robot (agent 0) included, in the pedestrians' layout
     (:func:`human_observation`) — in place; inactive agents observe zeros (multi-agent testbed).
 
     Args (``B`` worlds of ``A`` agents, ``n`` observed slots): as :func:`human_observation` without ``world``;
         me: Out ``(B, A, 9)``; neighbors: Out ``(B, A, n, 5)``; mask: Out ``(B, A, n)`` (float32). The robot sees
         the pedestrians within ``sensing_range``; a pedestrian sees the robot only when ``robot_visible``.
+        grid_min: as :func:`human_observation`'s, per world.
     """
     B, A = radius.shape
     n = neighbors.shape[2]
-    dist = np.empty(max(n, 1))
-    idx = np.empty(max(n, 1), np.int64)
+    grid = grid_scratch(A)
+    cell_start, _, sx, sy, sidx, geo = grid
+    cand_d, cand_idx = np.empty(A + 8), np.empty(A + 8, np.int64)
+    rank = np.empty(RANK_MAX, np.int64)
+    dist = np.empty(A + 1)
+    idx = np.empty(A + 1, np.int64)
     for b in range(B):
+        use_grid = _observation_grid(pos, active, b, sensing_range, robot_visible, n, grid_min, grid)
         for i in range(A):
             m = me[b, i]
             neighbors[b, i] = 0.0
@@ -369,7 +487,10 @@ def agent_observations_batch(pos, vel, goal, radius, v_pref, heading, active, se
             m[0], m[1], m[2], m[3] = pos[b, i, 0], pos[b, i, 1], vel[b, i, 0], vel[b, i, 1]
             m[4], m[5], m[6], m[7], m[8] = goal[b, i, 0], goal[b, i, 1], radius[b, i], v_pref[b, i], heading[b, i]
             count = 0
-            if n > 0:
+            if use_grid:
+                count = _grid_neighbors(pos, b, i, sensing_range, n, cell_start, sx, sy, sidx, geo, cand_d,
+                                        cand_idx, rank, dist, idx)
+            elif n > 0:
                 for j in range(A):
                     if j == i or not active[b, j] or (j == 0 and not robot_visible):
                         continue
@@ -385,13 +506,76 @@ def agent_observations_batch(pos, vel, goal, radius, v_pref, heading, active, se
                 f[2], f[3], f[4] = vel[b, j, 0], vel[b, j, 1], radius[b, j]
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _disc_min_surface(pos, radius, b, i, reach, best, cell_start, sx, sy, sidx, geo):  # pragma: no cover - numba
+    """``best`` lowered to the smallest surface distance [m] from agent ``i`` to the grid's other members within
+    ``reach`` [m] (centre distance, may be inf) — computed as the brute-force loop does."""
+    px, py, ri = pos[b, i, 0], pos[b, i, 1], radius[b, i]
+    r0, r1 = disc_rows(py, reach, geo)
+    for gy in range(r0, r1 + 1):
+        t0, t1 = disc_row_span(gy, px, py, reach, geo, cell_start)
+        for t in range(t0, t1):
+            j = sidx[t]
+            if j != i:
+                dx, dy = sx[t] - px, sy[t] - py
+                best = min(best, math.sqrt(dx * dx + dy * dy) - ri - radius[b, j])
+    return best
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _grid_clearance(pos, radius, b, i, r_max, cell_start, sx, sy, sidx, geo):  # pragma: no cover - numba
+    """The smallest surface distance [m] from pedestrian ``i`` to the grid's other members (inf if none): the
+    brute-force minimum, bit for bit (the same distances; a minimum is order-free). Scans the disc one cell wider
+    than touching reach (``r_i + r_max``); unless the best distance found there proves that nobody beyond it is
+    nearer, once more the disc that this distance reaches (the whole grid if none was found), which does."""
+    ri, eps = radius[b, i], geo[5]
+    reach = ri + r_max + geo[2]
+    best = _disc_min_surface(pos, radius, b, i, reach, np.inf, cell_start, sx, sy, sidx, geo)
+    # anyone unvisited is farther than `reach` (centres): surface > reach − r_i − r_max, less rounding (≪ eps)
+    if not best < reach - ri - r_max - 2.0 * eps:
+        reach = best + ri + r_max + 2.0 * eps if best < np.inf else np.inf
+        best = _disc_min_surface(pos, radius, b, i, reach, best, cell_start, sx, sy, sidx, geo)
+    return best
+
+
+CLEARANCE_MAX_CELL = 2.0
+"""Largest grid cell of :func:`crowd_clearance`, as a multiple of the largest pedestrian radius."""
+
+
 @nb.njit(cache=True, error_model="numpy")
-def crowd_clearance(pos, radius, active, robot_visible, nearest, touch_ped, touch_robot):  # pragma: no cover
+def crowd_clearance(pos, radius, active, robot_visible, nearest, touch_ped, touch_robot,
+                    grid_min=GRID_MIN):  # pragma: no cover
     """Per pedestrian of every world, in place: ``nearest`` ``(B, H)`` — the smallest surface distance to another
     active agent (the robot counted when ``robot_visible``; inf if none) [m] —, ``touch_ped`` / ``touch_robot``
-    ``(B, H)`` bool — its disc overlaps another pedestrian's / the robot's. Inactive pedestrians: inf, False."""
+    ``(B, H)`` bool — its disc overlaps another pedestrian's / the robot's. Inactive pedestrians: inf, False.
+    ``pos`` ``(B, A, 2)`` [m], ``radius`` ``(B, A)`` [m], ``active`` ``(B, A)`` bool. A world with more than
+    ``grid_min`` active pedestrians searches them on a grid of cells (:mod:`crowdbench.spatial`), the robot
+    directly — the same bits as the brute-force loop (a pedestrian touches another exactly when its smallest
+    distance to the pedestrians is negative)."""
     B, A = radius.shape
+    grid = grid_scratch(A)
+    cell_start, cell_of, sx, sy, sidx, geo = grid
     for b in range(B):
+        if count_members(active, b, 1) > grid_min and finite_world(pos, b):
+            r_max = 0.0
+            for j in range(1, A):
+                if active[b, j]:
+                    r_max = max(r_max, radius[b, j])
+            build_grid(pos, active, b, max(CLEARANCE_MAX_CELL * r_max, 1e-3), GRID_PER_CELL, cell_start, cell_of,
+                       sx, sy, sidx, geo, 1)
+            robot = robot_visible and active[b, 0]
+            for i in range(1, A):
+                near, tp, tr = np.inf, False, False
+                if active[b, i]:
+                    near = _grid_clearance(pos, radius, b, i, r_max, cell_start, sx, sy, sidx, geo)
+                    tp = near < 0.0
+                    if robot:
+                        dx, dy = pos[b, 0, 0] - pos[b, i, 0], pos[b, 0, 1] - pos[b, i, 1]
+                        d = math.sqrt(dx * dx + dy * dy) - radius[b, i] - radius[b, 0]
+                        near = min(d, near)
+                        tr = d < 0.0
+                nearest[b, i - 1], touch_ped[b, i - 1], touch_robot[b, i - 1] = near, tp, tr
+            continue
         for i in range(1, A):
             near, tp, tr = np.inf, False, False
             if active[b, i]:
@@ -430,12 +614,13 @@ def drive_actions(actions, slots, v_max, velocities, driven):  # pragma: no cove
 
 @nb.njit(cache=True, error_model="numpy")
 def one_world_observations(pos, vel, goal, radius, v_pref, heading, active, max_range, by_id, sensing_range,
-                           robot_visible, robot, humans, mask, me, neighbors, hmask):  # pragma: no cover - numba
+                           robot_visible, robot, humans, mask, me, neighbors, hmask,
+                           grid_min=GRID_MIN):  # pragma: no cover - numba
     """:func:`robot_observation` then :func:`human_observation` of a batch of one world in one dispatch (the
     PettingZoo adapter builds both every step); arguments as theirs."""
     robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range, by_id, robot, humans, mask)
     human_observation(pos, vel, goal, radius, v_pref, heading, active, 0, sensing_range, robot_visible, me,
-                      neighbors, hmask)
+                      neighbors, hmask, grid_min)
 
 
 @nb.njit(cache=True, error_model="numpy")

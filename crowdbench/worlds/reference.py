@@ -13,6 +13,9 @@ import numpy as np
 
 from crowdbench.geometry import norm, pair_overlaps, swept_pair_min_distance, swept_segment_fraction
 
+BRUTE_FORCE = np.iinfo(np.int64).max
+"""A ``grid_min`` that no crowd exceeds: the compiled kernels' brute-force path."""
+
 
 def _atan2(y: np.ndarray, x: np.ndarray) -> np.ndarray:
     """The C library's ``atan2`` element by element (numpy's ``arctan2`` is vectorised differently on some CPUs)."""
@@ -51,8 +54,9 @@ def motion(pos, vel, v_pref, radius, active, edges, dt, iters, disp, robot_hit, 
 
 def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_min, robot_hit, robot_turns,
             max_steps, rw, change_every, terms, reward, result, terminated, truncated, overlaps, reached,
-            change_due) -> int:
-    """See :func:`crowdbench.worlds._kernels.outcome` (the paper's piecewise reward, first matching case wins)."""
+            change_due, grid_min=None) -> int:
+    """See :func:`crowdbench.worlds._kernels.outcome` (the paper's piecewise reward, first matching case wins;
+    ``grid_min`` is the kernels' choice of neighbour search, and the reference counts overlaps by brute force)."""
     moving = np.einsum("bai,bai->ba", vel, vel) > 1e-12
     if robot_turns:
         moving[:, 0] = False
@@ -74,7 +78,7 @@ def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_mi
     truncated[:] = ~terminated & (steps >= max_steps)
     result[:] = np.select([success, collision, truncated], [1, 2, 3], 0)
     change_due[:] = (steps % change_every == 0) if change_every > 0 else False
-    overlaps[:] = pair_overlaps(pos[:, 1:], radius[:, 1:], active[:, 1:])
+    overlaps[:] = pair_overlaps(pos[:, 1:], radius[:, 1:], active[:, 1:], BRUTE_FORCE)
     d = goal[:, 1:] - pos[:, 1:]
     reached[:] = active[:, 1:] & (d[..., 0] * d[..., 0] + d[..., 1] * d[..., 1] <= radius[:, 1:] * radius[:, 1:])
     return int(reached.any()) | 2 * int(change_due.any())
@@ -82,7 +86,7 @@ def outcome(pos, vel, goal, radius, active, heading, steps, prev_goal_dist, d_mi
 
 def advance(robot_vel, human_vel, pos, vel, v_pref, radius, active, edges, dt, iters, disp, clip_robot, goal, heading,
             steps, prev_goal_dist, robot_turns, max_steps, rw, change_every, floats, ints, flags, reached,
-            change_due, mirror) -> int:
+            change_due, mirror, grid_min=None) -> int:
     """See :func:`crowdbench.worlds._kernels.advance`."""
     terms, reward, d_min, result, overlaps = floats[:5], floats[5], floats[6], ints[0], ints[1]
     robot_hit, terminated, truncated = flags[0], flags[1], flags[2]
@@ -118,8 +122,9 @@ def robot_observation(pos, vel, goal, radius, v_pref, heading, active, max_range
 
 
 def human_observation(pos, vel, goal, radius, v_pref, heading, active, world, sensing_range, robot_visible, me,
-                      neighbors, mask) -> None:
-    """See :func:`crowdbench.worlds._kernels.human_observation`."""
+                      neighbors, mask, grid_min=None) -> None:
+    """See :func:`crowdbench.worlds._kernels.human_observation` (``grid_min``: the kernel's choice of neighbour
+    search, unused here)."""
     pos, vel, goal, radius, v_pref = pos[world], vel[world], goal[world], radius[world], v_pref[world]
     heading, active = heading[world], active[world]
     me[:] = np.concatenate([pos[1:], vel[1:], goal[1:], radius[1:, None], v_pref[1:, None], heading[1:, None]], 1)

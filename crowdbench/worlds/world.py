@@ -28,6 +28,7 @@ import pymunk
 from crowdbench.config import WorldConfig
 from crowdbench.geometry import norm, obstacle_edges
 from crowdbench.humans.base import CrowdState, HumanModel, PedestrianModelError, make
+from crowdbench.spatial import GRID_MIN
 from crowdbench.worlds._kernels import advance, change_goals, first_clear, spawn_clear
 from crowdbench.worlds.layouts import Layout, make_layout
 from crowdbench.worlds.physics import PymunkWorlds
@@ -186,6 +187,10 @@ class CrowdWorld:
         self._hv_shape = (B, H, 2)
         self._reached, self._change_due = np.zeros((B, H), dtype=bool), np.zeros(B, dtype=bool)  # its event outputs
         self._state: CrowdState | None = None
+        self.grid_min = GRID_MIN
+        """The world's kernels (overlaps, pedestrian observations and clearance) search a world's neighbours on a
+        grid of cells when it has more active agents than this, by brute force otherwise: the same results bit for
+        bit, so this only trades speed (set it above ``num_agents`` to time the brute force)."""
         self.reset(seeds=list(range(B)))
         self.physics.verify()
 
@@ -212,7 +217,7 @@ class CrowdWorld:
         return state
 
     def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
+        self.__dict__.update({"grid_min": GRID_MIN, **state})  # (worlds pickled before it existed)
         B = self.num_worlds
         self.physics = PymunkWorlds(self.radius[0], self.obstacles, B)
         for b in range(B):
@@ -391,7 +396,7 @@ class CrowdWorld:
         events = advance(rv.reshape(B, 2), hv, self.pos, self.vel, self.v_pref, self.radius, self.active, self.edges,
                          self.dt, 20, self._disp, not unicycle, self.goal, self.heading, self.steps,
                          self.prev_goal_dist, unicycle, self._max_steps, self._rw, self._change_every, floats, ints,
-                         flags, self._reached, self._change_due, self.physics.mirror)
+                         flags, self._reached, self._change_due, self.physics.mirror, self.grid_min)
         if events < 0:
             raise self._non_finite(human_override)
         self.physics.sync()  # the kernel wrote the positions into its rows

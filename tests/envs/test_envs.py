@@ -287,3 +287,43 @@ def test_finished_pedestrians_leave_and_the_others_keep_their_own_rewards():
                 assert info[a]["reward_terms"]["progress"] == pytest.approx(want, abs=1e-5)
         assert not gone & set(env.agents)
     assert len(gone) >= 4
+
+
+def _human_infos_before(humans, slots, crowd, terms):
+    """``CrowdParallelEnv._human_infos`` as it was (rows stacked in numpy, one dict per agent in a loop): the
+    oracle of the faster form."""
+    n = len(humans)
+    cnames, tnames = list(crowd), list(terms)
+    crows = np.stack([crowd[k][0, slots] for k in cnames], 1).tolist() if cnames else [()] * n
+    trows = np.stack([terms[k][0, slots] for k in tnames], 1).tolist() if tnames else None
+    if trows is None:
+        return {a: dict(zip(cnames, c, strict=True)) for a, c in zip(humans, crows, strict=True)}
+    infos = {}
+    for agent, c, t in zip(humans, crows, trows, strict=True):
+        info = dict(zip(cnames, c, strict=True))
+        info["reward_terms"] = dict(zip(tnames, t, strict=True))
+        infos[agent] = info
+    return infos
+
+
+@pytest.mark.parametrize("model,reward", [("responsive_orca", "progress"), ("orca", "progress"),
+                                          ("responsive_orca", "none"), ("orca", "none")])
+def test_pedestrian_infos_are_what_they_were(model, reward):
+    """The pedestrians' infos — the model's analysis values (mixed dtypes: floats and flags, given as the stacked
+    rows' common type) and the reward terms — equal the former per-agent construction, keys and types included."""
+    env = crowdbench.parallel_env(num_humans=6, human_model=model, human_reward=reward, seed=1)
+    env.reset()
+    for _ in range(3):
+        w = env.world
+        _, _, _, _, infos = env.step({"robot": np.array([0.4, 0.1]), "human_2": np.array([0.5, 0.5])})
+        humans = [a for a in infos if a != "robot"]
+        crowd = w.human_model.info()
+        terms = {k: np.asarray([[infos[a]["reward_terms"][k] for a in humans]]) for k in
+                 (infos[humans[0]].get("reward_terms") or {})}
+        slots = np.arange(len(humans))
+        want = _human_infos_before(humans, slots, crowd, terms)
+        got = env._human_infos(humans, slots, crowd, terms)
+        assert got == want
+        assert [[type(v) for v in got[a].values()] for a in humans] == \
+            [[type(v) for v in want[a].values()] for a in humans]
+        assert {a: infos[a] for a in humans} == want
