@@ -28,7 +28,7 @@ def predictor_cmd(args: argparse.Namespace) -> int:
     if args.action == "train":
         tcfg = pt.PredictorTrainConfig(epochs=args.epochs, seed=args.seed)
         out = args.out or "runs/gst"
-        m = pt.train(data, out, tcfg)
+        m = pt.train(data, out, tcfg, crowd=pt.recorded_crowd(args.data))
         print(f"wrote {os.path.join(out, 'gst.pt')}: held-out ADE {m['ade']:.3f} m, FDE {m['fde']:.3f} m "
               f"(constant velocity {m['const_vel_ade']:.3f} / {m['const_vel_fde']:.3f} m)")
         return 0

@@ -31,6 +31,9 @@ from crowdbench.nn.ragged import ragged_attention, row_offsets
 from crowdbench.predictors.base import HORIZON, OBSERVED, PREDICTORS, Predictor, Track
 
 METHOD = "gst"
+DEFAULT_CHECKPOINT = "gst-crowdnavpp"
+"""The shipped predictor a ``gst`` predictor loads by default: trained on scenes of the default (CrowdNav++) crowd;
+``gst`` is the one trained on crowdbench 0.2's crowd, kept for the checkpoints trained with it."""
 SCALE = 5.0
 """Positions are divided by this before embedding (the sensing range) [m]."""
 
@@ -155,7 +158,8 @@ class GSTPredictor(Predictor):
     inference, one pass per call).
 
     Args:
-        checkpoint: Path or shipped name (default: the shipped ``gst``, trained by ``crowdbench predictor train``).
+        checkpoint: Path or shipped name (default: :data:`DEFAULT_CHECKPOINT`, trained by ``crowdbench predictor
+            train``).
         model: Alternatively a live :class:`GSTModel`.
     """
 
@@ -187,10 +191,11 @@ class GSTPredictor(Predictor):
 
 
 def load_model(checkpoint: str | os.PathLike | None = None) -> tuple[GSTModel, dict[str, Any]]:
-    """The model of a predictor checkpoint (path or shipped name; ``None``: the shipped ``gst``) and its metadata."""
+    """The model of a predictor checkpoint (path or shipped name; ``None``: :data:`DEFAULT_CHECKPOINT`) and its
+    metadata."""
     from crowdbench import checkpoints
 
-    path = checkpoints.resolve(METHOD, checkpoint)
+    path = checkpoints.resolve(METHOD, DEFAULT_CHECKPOINT if checkpoint is None else checkpoint)
     ckpt = checkpoints.load(path, METHOD)
     model = GSTModel(GSTConfig(**ckpt["model"]))
     model.load_state_dict(ckpt["net"])

@@ -112,7 +112,9 @@ def record(cfg: RecordConfig, path: str | None = None) -> dict[str, np.ndarray]:
         from crowdbench.io import atomic_path
 
         with atomic_path(path, suffix=".npz") as tmp, open(tmp, "wb") as f:
-            np.savez_compressed(f, **data, config=json.dumps(asdict(cfg)))
+            from crowdbench.worlds.digest import crowd_digest
+
+            np.savez_compressed(f, **data, config=json.dumps({**asdict(cfg), "crowd": crowd_digest()}))
     return data
 
 
@@ -120,6 +122,13 @@ def load_data(path: str) -> dict[str, np.ndarray]:
     """Scenes written by :func:`record`."""
     with np.load(path, allow_pickle=False) as f:
         return {k: f[k] for k in f.files if k != "config"}
+
+
+def recorded_crowd(path: str) -> str | None:
+    """The crowd digest (:func:`~crowdbench.worlds.digest.crowd_digest`) the scenes of ``path`` were recorded on;
+    ``None`` for files written before it was recorded."""
+    with np.load(path, allow_pickle=False) as f:
+        return json.loads(str(f["config"])).get("crowd") if "config" in f.files else None
 
 
 @dataclass(frozen=True)
@@ -174,9 +183,11 @@ def compare(data: dict[str, np.ndarray], checkpoint: str | None = None) -> dict[
             "const_vel": errors(constant_velocity(data["pos"], data["seen"]), data["future"], data["valid"])}
 
 
-def train(data: dict[str, np.ndarray], out: str, cfg: PredictorTrainConfig, quiet: bool = False) -> dict[str, Any]:
+def train(data: dict[str, np.ndarray], out: str, cfg: PredictorTrainConfig, quiet: bool = False,
+          crowd: str | None = None) -> dict[str, Any]:
     """Train a :class:`~crowdbench.predictors.gst.GSTModel` on recorded scenes; writes ``out/gst.pt`` (the checkpoint,
-    atomically) and ``out/history.json``; returns the checkpoint's metrics."""
+    atomically) and ``out/history.json``; returns the checkpoint's metrics. ``crowd``: the digest of the crowd the
+    scenes were recorded on (:func:`recorded_crowd`), kept in the checkpoint's provenance."""
     import torch
 
     from crowdbench import __version__, checkpoints
@@ -232,7 +243,7 @@ def train(data: dict[str, np.ndarray], out: str, cfg: PredictorTrainConfig, quie
     os.makedirs(out, exist_ok=True)
     ckpt = {"format": checkpoints.FORMAT, "method": METHOD, "crowdbench_version": __version__,
             "model": asdict(model.cfg), "net": model.state_dict(), "seed": cfg.seed, "epochs": cfg.epochs,
-            "train_config": asdict(cfg), **metrics}
+            "train_config": asdict(cfg), "crowd": crowd, **metrics}
     checkpoints.save(ckpt, os.path.join(out, "gst.pt"))
     write_text(os.path.join(out, "history.json"),
                json.dumps({"config": asdict(cfg), "history": history, **metrics}, indent=1) + "\n")

@@ -144,11 +144,16 @@ def test_gst_packed_steps_equal_the_plain_modules_with_gradients():
 def test_gst_learns_saves_loads_safely_and_predicts_in_the_observation(tmp_path):
     data = record(RecordConfig(worlds=6, steps=160, stride=2, seed=5), str(tmp_path / "d.npz"))
     assert data["valid"].any() and set(data) == {"pos", "seen", "future", "valid", "world"}
-    m = train(data, str(tmp_path / "run"), PredictorTrainConfig(epochs=3, batch_size=32), quiet=True)
+    from crowdbench.predictors.training import recorded_crowd
+    from crowdbench.worlds.digest import crowd_digest
+
+    assert recorded_crowd(str(tmp_path / "d.npz")) == crowd_digest()  # the crowd travels into the provenance
+    m = train(data, str(tmp_path / "run"), PredictorTrainConfig(epochs=3, batch_size=32), quiet=True,
+              crowd=recorded_crowd(str(tmp_path / "d.npz")))
     hist = __import__("json").loads((tmp_path / "run" / "history.json").read_text())["history"]
     assert hist["nll"][-1] < hist["nll"][0]
     ckpt = checkpoints.load(tmp_path / "run" / "gst.pt", "gst")  # weights_only
-    assert ckpt["ade"] == m["ade"] and m["const_vel_ade"] > 0
+    assert ckpt["ade"] == m["ade"] and m["const_vel_ade"] > 0 and ckpt["crowd"] == crowd_digest()
     rows = compare(data, str(tmp_path / "run" / "gst.pt"))
     assert set(rows) == {"gst", "const_vel"} and all(np.isfinite(v).all() for v in rows.values())
     w = _world()

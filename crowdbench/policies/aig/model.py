@@ -64,8 +64,9 @@ class AIGConfig:
     DS-RNN's recipe: ``--model learn_std=false --model action_std=0.3``)."""
     predictor: str = "gst"
     """Trajectory predictor of the ``predicted`` observation: ``gst`` (learned), ``const_vel`` or ``truth``."""
-    predictor_checkpoint: str = "gst"
-    """The ``gst`` predictor's checkpoint (path or shipped name)."""
+    predictor_checkpoint: str = "gst-crowdnavpp"
+    """The ``gst`` predictor's checkpoint (path or shipped name): by default the one trained on the CrowdNav++
+    crowd; the checkpoints trained on crowdbench 0.2's crowd keep ``gst`` (that crowd's) in their stored config."""
 
     def __post_init__(self) -> None:
         check_action_std(self.action_std)
