@@ -24,6 +24,19 @@ Pins itself to one core and prints one JSON dict:
   ``crowdbench.humans.preferred_velocity``) outside the timer, then times ``doStep`` on the 64 simulators in turn;
 * ``build`` — compiler flags, peer commits, versions, CPU.
 
+``--crowdnav-large N [--circle-radius M]`` measures only CrowdNav at N humans (``crowdnav_large``): the same
+``env.config`` with ``human_num = N`` and, if given, ``circle_radius = M`` [m]. The first
+``env.reset(phase="test", test_case=0)`` runs under a ``--reset-timeout`` (60 s): CrowdNav's circle-crossing
+placement (``crowd_sim/envs/crowd_sim.py:155-176``) redraws a start until it is ``0.3 + 0.3 + discomfort_dist``
+= 0.8 m from every start *and goal* already placed, without bound, so a crowd that cannot fit never returns (the
+output says how many humans were placed). If it returns, ``env.step`` is timed as above (20 warm-up steps,
+resets outside the timer) for ``--large-runs`` (3) runs of ``--large-steps`` (50) steps. The N = 200 figures in
+``docs/speed.md`` (``benchmarks/peers-n200-results.json``)::
+
+    /tmp/rvo/venv/bin/python benchmarks/bench_peers.py --crowdnav-large 200                    # 4 m: no reset
+    /tmp/rvo/venv/bin/python benchmarks/bench_peers.py --crowdnav-large 200 --circle-radius 40 \
+        --large-steps 100 --large-runs 3
+
 Peer environment (what produced /tmp/rvo/venv; the package index is the machine's configured pip index)::
 
     mkdir -p /tmp/rvo/src /tmp/rvo/CrowdNav && cd /tmp/rvo
@@ -75,17 +88,15 @@ def _stats(samples: list[float]) -> dict[str, float]:
 
 
 def pin_one_core() -> int:
-    try:
-        os.sched_setaffinity(0, {0})
-    except OSError:
-        os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
+    """Pin to the lowest core allowed (core 0 unless started under ``taskset``)."""
+    os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
     return next(iter(os.sched_getaffinity(0)))
 
 
 # --------------------------------------------------------------------------------------------------- CrowdNav
 
 
-def make_crowdnav(n: int, crowdnav_dir: Path) -> Any:
+def make_crowdnav(n: int, crowdnav_dir: Path, circle_radius: float | None = None) -> Any:
     from crowd_sim.envs import CrowdSim
     from crowd_sim.envs.policy.linear import Linear
     from crowd_sim.envs.utils.robot import Robot
@@ -95,6 +106,8 @@ def make_crowdnav(n: int, crowdnav_dir: Path) -> Any:
     if not cfg.read(path):
         raise SystemExit(f"CrowdNav's env.config not found at {path} (see --crowdnav)")
     cfg.set("sim", "human_num", str(n))
+    if circle_radius is not None:
+        cfg.set("sim", "circle_radius", repr(float(circle_radius)))
     env = CrowdSim()
     env.configure(cfg)
     robot = Robot(cfg, "robot")
@@ -113,8 +126,9 @@ def _to_goal(env: Any) -> Any:
 
 
 def crowdnav_steps_per_s(n: int, steps: int, repeats: int, resets: bool, crowdnav_dir: Path,
-                         outcomes: dict[str, int] | None = None) -> dict[str, float]:
-    env = make_crowdnav(n, crowdnav_dir)
+                         outcomes: dict[str, int] | None = None,
+                         circle_radius: float | None = None) -> dict[str, float]:
+    env = make_crowdnav(n, crowdnav_dir, circle_radius)
     env.reset(phase="test", test_case=0)
     for _ in range(20):  # warm-up
         *_, done, _ = env.step(_to_goal(env))
@@ -142,6 +156,44 @@ def crowdnav_steps_per_s(n: int, steps: int, repeats: int, resets: bool, crowdna
         return steps / elapsed
 
     return _stats([run(r) for r in range(repeats)])
+
+
+class _ResetTimeoutError(Exception):
+    pass
+
+
+def crowdnav_large(n: int, circle_radius: float | None, steps: int, repeats: int, reset_timeout: float,
+                   crowdnav_dir: Path) -> dict[str, Any]:
+    """CrowdNav at a large N: the first ``env.reset(phase="test", test_case=0)`` under a wall-clock limit of
+    ``reset_timeout`` s (its rejection sampling loops without bound when the crowd cannot fit); if it returns,
+    ``env.step`` timed as in :func:`crowdnav_steps_per_s` (20 warm-up steps, resets outside the timer)."""
+    import signal
+
+    def alarm(*_: Any) -> None:
+        raise _ResetTimeoutError
+
+    env = make_crowdnav(n, crowdnav_dir, circle_radius)
+    out: dict[str, Any] = {"human_num": n, "circle_radius_m": env.circle_radius,
+                           "discomfort_dist_m": env.discomfort_dist, "reset_timeout_s": reset_timeout}
+    old = signal.signal(signal.SIGALRM, alarm)
+    signal.setitimer(signal.ITIMER_REAL, reset_timeout)
+    t = time.perf_counter()
+    try:
+        env.reset(phase="test", test_case=0)
+    except _ResetTimeoutError:
+        out["reset"] = f"did not return within {reset_timeout:g} s ({len(env.humans)} of {n} humans placed)"
+        return out
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    out["first_reset_s"] = time.perf_counter() - t
+    outcomes: dict[str, int] = {}
+    t = time.perf_counter()
+    out["steps_per_s"] = crowdnav_steps_per_s(n, steps, repeats, False, crowdnav_dir, outcomes, circle_radius)
+    out["steps_per_run"] = steps
+    out["episodes"] = outcomes
+    out["wall_s"] = time.perf_counter() - t
+    return out
 
 
 def crowdnav_reset_ms(n: int, resets: int, crowdnav_dir: Path) -> dict[str, float]:
@@ -275,8 +327,22 @@ def main() -> None:
                    help="only the ORCA kernels (RVO2 against crowdbench's orca_batch), skipping CrowdNav's env")
     p.add_argument("--crowdnav", type=Path, default=Path("/tmp/rvo/CrowdNav"),
                    help="CrowdNav checkout (for crowd_nav/configs/env.config)")
+    p.add_argument("--crowdnav-large", type=int, default=0, metavar="N",
+                   help="only CrowdNav at N humans: whether reset returns, then env.step timed (see docstring)")
+    p.add_argument("--circle-radius", type=float, default=None, metavar="M",
+                   help="with --crowdnav-large: env.config's circle_radius [m] (default: the file's, 4 m)")
+    p.add_argument("--large-steps", type=int, default=50, help="with --crowdnav-large: timed steps per run")
+    p.add_argument("--large-runs", type=int, default=3, help="with --crowdnav-large: timed runs")
+    p.add_argument("--reset-timeout", type=float, default=60.0, metavar="S",
+                   help="with --crowdnav-large: give up on the first reset after S seconds")
     args = p.parse_args()
     core = pin_one_core()
+    if args.crowdnav_large:
+        res_large = {"pinned_core": core, "crowdnav_large": crowdnav_large(
+            args.crowdnav_large, args.circle_radius, args.large_steps, args.large_runs, args.reset_timeout,
+            args.crowdnav), "build": build_info(args.crowdnav)}
+        print(json.dumps(res_large, indent=2))
+        return
     quick = args.quick
     res: dict[str, Any] = {"quick": quick, "pinned_core": core, "crowdnav_steps_per_s": {}, "crowdnav_reset_ms": {},
                            "rvo2_agent_steps_per_s": {}}

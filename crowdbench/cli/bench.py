@@ -109,15 +109,17 @@ def env_steps_per_s(n: int, batch: int, steps: int, repeats: int) -> dict[str, f
     return _repeat(run, repeats)
 
 
-def pettingzoo_steps_per_s(n: int, steps: int, repeats: int, resets: bool) -> dict[str, float]:
+def pettingzoo_steps_per_s(n: int, steps: int, repeats: int, resets: bool,
+                           layout: Any = "circle_crossing") -> dict[str, float]:
     """One world through ``crowdbench.parallel_env`` (defaults: circle crossing, ORCA pedestrians, every agent's
     observation and info built; no pedestrian reward, like for like with CrowdNav): the robot heads for its goal at
     full speed (computed from its observation, outside the timer), pedestrians are model-driven. Each repeat times
     ``steps`` calls of ``env.step``; a finished episode is followed by ``reset`` — inside the timer when
-    ``resets``, outside otherwise (as CrowdNav's figures are quoted both ways)."""
+    ``resets``, outside otherwise (as CrowdNav's figures are quoted both ways). ``layout``: a layout name or
+    instance (e.g. ``CircleCrossing(radius=40)`` for a crowd too large for the default circle)."""
     import crowdbench
 
-    env = crowdbench.parallel_env(num_humans=n, human_reward="none")  # no pedestrian rewards, as CrowdNav
+    env = crowdbench.parallel_env(layout=layout, num_humans=n, human_reward="none")  # no pedestrian rewards
 
     def action(obs: dict) -> dict[str, np.ndarray]:
         r = obs["robot"]["robot"]
