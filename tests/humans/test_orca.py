@@ -204,7 +204,7 @@ def test_neighbour_selection_is_rvo2s(m, k_max, ties):
     assert list(zip(nb_d[:cnt].tolist(), nb_idx[:cnt].tolist(), strict=True)) == want
 
 
-@pytest.mark.parametrize("n", [200, 1000])
+@pytest.mark.parametrize("n", [40, 200, 1000])
 def test_grid_neighbour_search_is_bit_identical_to_brute_force(n):
     """Above ``GRID_MIN`` agents ORCA finds neighbours on a grid of cells; over 20 steps of a jittered grid crowd
     crossing its centre (nobody overlapping at the start), with obstacles, inactive agents and an ignored slot, the
