@@ -1,7 +1,8 @@
 """ORCA, crowdbench's kernel against RVO2, alternated run by run in one process: agent-steps per CPU second.
 
     PYTHONPATH=. python benchmarks/bench_orca_rvo2.py [--rounds 5] [--n 20 50 100 200 500 1000] [--worlds 1 64]
-                                                      [--crowds circle grid] [--target 100000] [--json out.json]
+                                                      [--crowds circle grid] [--target 100000] [--api batch]
+                                                      [--json out.json]
 
 Needs Python-RVO2 (``import rvo2``) in the interpreter, built ``-O2`` as ``benchmarks/bench_peers.py`` describes.
 For each crowd (``crowdbench.bench.bench_crowd``: ``circle`` — people on a ring, overlapping from N ≈ 100, crossing
@@ -12,7 +13,8 @@ distance 10 m, 10 neighbours, time horizons 5 s, radius 0.31 m, max speed 1 m/s,
 A run is ``episodes`` × ``steps`` steps, each episode from the start state, so that every run does the same work:
 ``steps`` = 20 (fewer for large batches), ``episodes`` such that a run has about ``--target`` agent-steps. Before
 every step the preferred velocities (``crowdbench.humans.preferred_velocity`` toward the goal = −start, speed 1)
-are set outside the timer; only ``orca_batch`` + the position update (crowdbench) and ``doStep`` (RVO2, which
+are set outside the timer; only ``orca_batch`` + the position update in numpy (crowdbench; with ``--api advance``
+``orca_advance``, both in one call) and ``doStep`` (RVO2, which
 updates positions itself) are timed, in process CPU time (``time.process_time``), pinned to one core.
 
 Prints per configuration the median agent-steps/s of each and the ratio crowdbench / RVO2 of every round.
@@ -31,7 +33,7 @@ import numpy as np
 
 from crowdbench.bench import bench_crowd
 from crowdbench.humans import preferred_velocity
-from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
+from crowdbench.humans.orca_kernel import build_obstacles, orca_advance, orca_batch
 
 DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, RADIUS, MAX_SPEED = 0.25, 10.0, 10, 5.0, 0.31, 1.0
 
@@ -59,6 +61,27 @@ def crowdbench_run(start: np.ndarray, episodes: int, steps: int, kernel=orca_bat
             kernel(pos, vel, pref, *args, *obst, DT, out)
             vel, out = out, vel
             pos += vel * DT
+            elapsed += time.process_time() - t
+    return episodes * steps * B * N / elapsed
+
+
+def crowdbench_advance_run(start: np.ndarray, episodes: int, steps: int) -> float:
+    """Agent-steps per CPU second of ``orca_advance`` (RVO2's ``doStep``: velocities and positions in one call, agent
+    arrays in blocks) on ``start`` ``(B, N, 2)``."""
+    B, N = start.shape[:2]
+    f = np.ones((B, N))
+    flt = np.stack([RADIUS * f, MAX_SPEED * f, NEIGHBOR_DIST * f, HORIZON * f, HORIZON * f])
+    ints = np.stack([np.full((B, N), MAX_NEIGHBORS, np.int64), np.full((B, N), -1, np.int64)])
+    flags = np.ones((2, B, N), bool)
+    obst, goal = build_obstacles([]), -start
+    elapsed = 0.0
+    for _ in range(episodes):
+        vec = np.zeros((4, B, N, 2))
+        vec[0] = start
+        for _ in range(steps):
+            vec[2] = preferred_velocity(vec[0], goal, f, DT)
+            t = time.process_time()
+            orca_advance(vec, flt, ints, flags, *obst, DT)
             elapsed += time.process_time() - t
     return episodes * steps * B * N / elapsed
 
@@ -91,12 +114,13 @@ def rvo2_run(start: np.ndarray, episodes: int, steps: int) -> float:
     return episodes * steps * B * N / elapsed
 
 
-def compare(n: int, worlds: int, crowd: str, rounds: int, target: int) -> dict:
+def compare(n: int, worlds: int, crowd: str, rounds: int, target: int, api: str = "batch") -> dict:
     start = bench_crowd(n, worlds, crowd)
     episodes, steps = plan(n, worlds, target)
     ours, peer = [], []
+    run = crowdbench_run if api == "batch" else crowdbench_advance_run
     for _ in range(rounds):
-        ours.append(crowdbench_run(start, episodes, steps))
+        ours.append(run(start, episodes, steps))
         peer.append(rvo2_run(start, episodes, steps))
     ratios = [o / p for o, p in zip(ours, peer, strict=True)]
     return {"n": n, "worlds": worlds, "crowd": crowd, "episodes": episodes, "steps": steps,
@@ -110,18 +134,22 @@ def main() -> None:
     p.add_argument("--worlds", type=int, nargs="+", default=[1, 64])
     p.add_argument("--crowds", nargs="+", default=["circle", "grid"])
     p.add_argument("--target", type=int, default=100_000, help="agent-steps per run")
+    p.add_argument("--api", choices=["batch", "advance"], default="batch",
+                   help="crowdbench's side: orca_batch + the position update in numpy (batch) or orca_advance "
+                        "(RVO2's doStep in one call, arrays in blocks)")
     p.add_argument("--json", help="also write the results here")
     a = p.parse_args()
     with contextlib.suppress(OSError):
         os.sched_setaffinity(0, {0})
     crowdbench_run(bench_crowd(100, 1), 1, 2)  # compile (or load the cache) outside the timer
+    crowdbench_advance_run(bench_crowd(100, 1), 1, 2)
     rows = []
     print("| crowd | worlds | N | crowdbench M agent-steps/s | RVO2 M | crowdbench / RVO2 per round | median |")
     print("|---|---:|---:|---:|---:|---|---:|")
     for crowd in a.crowds:
         for worlds in a.worlds:
             for n in a.n:
-                r = compare(n, worlds, crowd, a.rounds, a.target)
+                r = compare(n, worlds, crowd, a.rounds, a.target, a.api)
                 rows.append(r)
                 print(f"| {crowd} | {worlds} | {n} | {r['crowdbench'] / 1e6:.2f} | {r['rvo2'] / 1e6:.2f} | "
                       f"{' '.join(f'{x:.2f}' for x in r['ratios'])} | {statistics.median(r['ratios']):.2f} |",

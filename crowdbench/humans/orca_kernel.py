@@ -601,6 +601,29 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
 
 
 @nb.njit(cache=True, error_model="numpy")
+def orca_advance(vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex, dt):  # pragma: no cover - numba
+    """One ORCA simulation step in place, RVO2's ``doStep``: new velocities (:func:`orca_batch`), then every active
+    agent's position advanced by its new velocity times ``dt`` [s]. Agent arrays in blocks (one argument each
+    instead of twelve, so a call on one small world costs little more than its arithmetic): ``vec`` ``(4, B, A, 2)`` —
+    positions [m] and velocities [m/s] (both updated), preferred velocities [m/s], scratch —, ``flt`` ``(5, B, A)``
+    — radii [m], max speeds [m/s], neighbour distances [m], time horizons for agents and for obstacles [s] —,
+    ``ints`` ``(2, B, A)`` — neighbour caps, ignored slot (-1: none) —, ``flags`` ``(2, B, A)`` bool — active,
+    controlled; obstacles from :func:`build_obstacles`."""
+    pos, vel, out = vec[0], vec[1], vec[3]
+    orca_batch(pos, vel, vec[2], flt[0], flt[1], flt[2], ints[0], flt[3], flt[4], flags[0], flags[1], ints[1], opoint,
+               onext, oprev, odir, oconvex, dt, out)
+    active = flags[0]
+    B, A = pos.shape[0], pos.shape[1]
+    for b in range(B):
+        for i in range(A):
+            vx, vy = out[b, i, 0], out[b, i, 1]
+            vel[b, i, 0], vel[b, i, 1] = vx, vy
+            if active[b, i]:
+                pos[b, i, 0] += vx * dt
+                pos[b, i, 1] += vy * dt
+
+
+@nb.njit(cache=True, error_model="numpy")
 def orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active,
                 ignore_robot, pad, dt, pref_speed, pos, vel, pref, rad, vmax, act, ignore):  # pragma: no cover - numba
     """Fill :func:`orca_batch`'s agent arrays ``[robot, pedestrians...]`` from a crowd state, in place.

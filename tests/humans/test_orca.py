@@ -336,3 +336,35 @@ def test_a_non_finite_position_is_one_clear_error_not_a_crash(n, bad):
     sim.setAgentPosition(n // 2, (bad, 0.0))
     with pytest.raises(ValueError, match="non-finite position"):
         sim.doStep()
+
+
+def test_orca_advance_is_orca_batch_then_the_position_update():
+    """``orca_advance`` (RVO2's ``doStep`` on block arrays) equals ``orca_batch`` followed by each active agent's
+    position advanced by its new velocity, bit for bit, with obstacles, an inactive agent and an ignored slot."""
+    from crowdbench.humans import preferred_velocity
+    from crowdbench.humans.orca_kernel import build_obstacles, orca_advance, orca_batch
+
+    rng = np.random.default_rng(3)
+    start = rng.uniform(-6, 6, (2, 50, 2))
+    B, N = start.shape[:2]
+    f = np.ones((B, N))
+    flt = np.stack([0.3 * f, f, 10 * f, 5 * f, 5 * f])
+    ints = np.stack([np.full((B, N), 10), np.full((B, N), -1)]).astype(np.int64)
+    ints[1, 0, 5] = 2
+    flags = np.ones((2, B, N), bool)
+    flags[0, 0, 3] = False
+    obst = build_obstacles([[(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]])
+    vec = np.zeros((4, B, N, 2))
+    vec[0] = start
+    pos, vel = start.copy(), np.zeros_like(start)
+    for _ in range(10):
+        pref = preferred_velocity(pos, -start, f, 0.25)
+        vec[2] = pref
+        out = np.empty_like(pos)
+        orca_batch(pos, vel, pref, flt[0], flt[1], flt[2], ints[0], flt[3], flt[4], flags[0], flags[1], ints[1],
+                   *obst, 0.25, out)
+        vel, pos = out, pos + np.where(flags[0][..., None], out * 0.25, 0.0)
+        orca_advance(vec, flt, ints, flags, *obst, 0.25)
+        np.testing.assert_array_equal(vec[1], vel)
+        np.testing.assert_array_equal(vec[0], pos)
+    assert np.array_equal(vec[0, 0, 3], start[0, 3])  # the inactive agent stays
