@@ -3,6 +3,8 @@
 Shapes: points and vectors are ``(..., 2)`` float64 arrays in metres; distances are ``(...)``.
 """
 
+# numba-cache-key: crowdbench.spatial 4042f385541a
+
 from __future__ import annotations
 
 from collections.abc import Sequence

@@ -10,8 +10,9 @@ same agents; where order matters they rank by (key, index) (:func:`select_neares
 order a brute-force loop over ascending indices produces with a stable insertion. Every geometric bound is widened
 by the grid's rounding slack (``geo[5]``), so an agent is never missed for a rounding of its cell.
 
-numba's on-disk cache does not follow imports: after editing this module, delete the cached kernels of the modules
-that inline it (``find crowdbench -name '*.nbi' -delete``) or they keep the old code.
+numba's on-disk cache does not follow imports: every module whose cached kernels call these carries a
+``# numba-cache-key`` line with this file's digest, which ``tests/test_numba_cache_keys.py`` keeps current (so an
+edit here changes those modules and their caches recompile).
 
 Grid layout (the ``geo`` array, 7 floats): min x, min y, cell size [m], nx, ny (cells per row and column), slack
 [m], 1 / cell size. The agents of cell ``k = gy·nx + gx`` are ``sidx[cell_start[k]:cell_start[k + 1]]`` (index

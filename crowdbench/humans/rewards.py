@@ -8,6 +8,8 @@ use the entry-point group ``crowdbench.human_rewards``). It sees the world befor
 Shipped: ``progress`` (below) and ``none`` (zero).
 """
 
+# numba-cache-key: crowdbench.worlds._kernels aadbf308bb70
+
 from __future__ import annotations
 
 from dataclasses import dataclass

@@ -33,6 +33,9 @@ The dispatch grows with the number of array arguments (≈ 70 ns each), so :func
 blocks. ``error_model="numpy"`` (as the ORCA kernel): divisions here are guarded, and need no zero check.
 """
 
+# numba-cache-key: crowdbench.geometry 6b984da3624e
+# numba-cache-key: crowdbench.spatial 4042f385541a
+
 from __future__ import annotations
 
 import math
