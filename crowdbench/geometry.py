@@ -3,7 +3,7 @@
 Shapes: points and vectors are ``(..., 2)`` float64 arrays in metres; distances are ``(...)``.
 """
 
-# numba-cache-key: crowdbench.spatial 4042f385541a
+# numba-cache-key: crowdbench.spatial b0452486ca54
 
 from __future__ import annotations
 
@@ -21,6 +21,7 @@ from crowdbench.spatial import (
     disc_rows,
     finite_world,
     grid_scratch,
+    member_max,
 )
 
 Polygon = Sequence[tuple[float, float]]
@@ -143,10 +144,7 @@ def pair_overlaps(pos: np.ndarray, radius: np.ndarray, active: np.ndarray,
     for b in range(B):
         n = 0
         if count_members(active, b, 0) > grid_min and finite_world(pos, b):
-            r_max = 0.0
-            for j in range(A):
-                if active[b, j]:
-                    r_max = max(r_max, radius[b, j])
+            r_max = member_max(radius, active, b, 0)
             build_grid(pos, active, b, max(2.0 * r_max, 1e-3), GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx,
                        geo)
             for i in range(A):

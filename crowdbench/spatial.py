@@ -214,3 +214,14 @@ def count_members(active, b, first):  # pragma: no cover - numba
     for j in range(first, active.shape[1]):
         n += active[b, j]
     return n
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def member_max(values, active, b, first):  # pragma: no cover - numba
+    """The largest ``values[b, j]`` over the active agents ``j ≥ first`` of world ``b`` (``values``, ``active``
+    ``(B, A)``); 0 if none (e.g. the largest radius [m], which sizes a grid's cells)."""
+    out = 0.0
+    for j in range(first, active.shape[1]):
+        if active[b, j]:
+            out = max(out, values[b, j])
+    return out

@@ -33,8 +33,8 @@ The dispatch grows with the number of array arguments (≈ 70 ns each), so :func
 blocks. ``error_model="numpy"`` (as the ORCA kernel): divisions here are guarded, and need no zero check.
 """
 
-# numba-cache-key: crowdbench.geometry 6b984da3624e
-# numba-cache-key: crowdbench.spatial 4042f385541a
+# numba-cache-key: crowdbench.geometry 31fac0ddc665
+# numba-cache-key: crowdbench.spatial b0452486ca54
 
 from __future__ import annotations
 
@@ -54,6 +54,7 @@ from crowdbench.spatial import (
     disc_rows,
     finite_world,
     grid_scratch,
+    member_max,
     select_nearest,
 )
 
@@ -560,10 +561,7 @@ def crowd_clearance(pos, radius, active, robot_visible, nearest, touch_ped, touc
     cell_start, cell_of, sx, sy, sidx, geo = grid
     for b in range(B):
         if count_members(active, b, 1) > grid_min and finite_world(pos, b):
-            r_max = 0.0
-            for j in range(1, A):
-                if active[b, j]:
-                    r_max = max(r_max, radius[b, j])
+            r_max = member_max(radius, active, b, 1)
             build_grid(pos, active, b, max(CLEARANCE_MAX_CELL * r_max, 1e-3), GRID_PER_CELL, cell_start, cell_of,
                        sx, sy, sidx, geo, 1)
             robot = robot_visible and active[b, 0]

@@ -5,8 +5,8 @@ and register it with :func:`register`. Placement is bounded (see :func:`place_wi
 fit the requested crowd raises ``ValueError`` instead of looping forever.
 """
 
-# numba-cache-key: crowdbench.geometry 6b984da3624e
-# numba-cache-key: crowdbench.worlds._kernels aadbf308bb70
+# numba-cache-key: crowdbench.geometry 31fac0ddc665
+# numba-cache-key: crowdbench.worlds._kernels 48daeaca49dc
 
 from __future__ import annotations
 

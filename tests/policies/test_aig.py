@@ -156,3 +156,12 @@ def test_shipped_checkpoint_loads_safely_and_navigates_a_crowd_better_than_drivi
     assert ckpt["seed"] == 0 and ckpt["model"]["robot_embed"] == 64  # the `small` widths
     # measured: 1.0 against 0.625
     assert aig["success_rate"] >= 0.9 and aig["success_rate"] >= straight["success_rate"] + 0.25, (aig, straight)
+
+
+def test_new_runs_read_the_default_predictor():
+    """AIG-GST's default predictor checkpoint is the predictors' default (the networks may not import the
+    predictors' layer, so the name is written twice; this keeps the two equal)."""
+    from crowdbench.policies.aig.model import AIGConfig
+    from crowdbench.predictors.gst import DEFAULT_CHECKPOINT
+
+    assert AIGConfig().predictor_checkpoint == DEFAULT_CHECKPOINT
