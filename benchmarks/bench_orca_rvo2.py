@@ -2,7 +2,8 @@
 
     PYTHONPATH=. python benchmarks/bench_orca_rvo2.py [--rounds 5] [--n 20 50 100 200 500 1000] [--worlds 1 64]
                                                       [--crowds circle grid] [--target 100000] [--api batch]
-                                                      [--json out.json]
+                                                      [--json out.json] [--plot scaling.png]
+    PYTHONPATH=. python benchmarks/bench_orca_rvo2.py --from-json out.json --plot scaling.png   # plot only
 
 Needs Python-RVO2 (``import rvo2``) in the interpreter, built ``-O2`` as ``benchmarks/bench_peers.py`` describes.
 For each crowd (``crowdbench.bench.bench_crowd``: ``circle`` — people on a ring, overlapping from N ≈ 100, crossing
@@ -17,7 +18,8 @@ are set outside the timer; only ``orca_batch`` + the position update in numpy (c
 ``orca_advance``, both in one call) and ``doStep`` (RVO2, which
 updates positions itself) are timed, in process CPU time (``time.process_time``), pinned to one core.
 
-Prints per configuration the median agent-steps/s of each and the ratio crowdbench / RVO2 of every round.
+Prints per configuration the median agent-steps/s of each and the ratio crowdbench / RVO2 of every round;
+``--plot`` draws the scaling figure (agent-steps/s against N, one panel per crowd).
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ import numpy as np
 from crowdbench.bench import bench_crowd
 from crowdbench.humans import preferred_velocity
 from crowdbench.humans.orca_kernel import build_obstacles, orca_advance, orca_batch
+from crowdbench.io import atomic_path
 
 DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, RADIUS, MAX_SPEED = 0.25, 10.0, 10, 5.0, 0.31, 1.0
 
@@ -127,6 +130,43 @@ def compare(n: int, worlds: int, crowd: str, rounds: int, target: int, api: str 
             "crowdbench": statistics.median(ours), "rvo2": statistics.median(peer), "ratios": ratios}
 
 
+def plot(rows: list[dict], path: str) -> None:
+    """The scaling figure: median M agent-steps/s against N (log axis), crowdbench per world count and RVO2 (one
+    simulator per world, so its rate hardly depends on the world count: the one-world runs are drawn), one panel per
+    crowd."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    crowds = sorted({r["crowd"] for r in rows})
+    fig, axes = plt.subplots(1, len(crowds), figsize=(5 * len(crowds), 4), dpi=100, squeeze=False)
+    names = {"circle": "ring (overlaps from N ≈ 100)", "grid": "jittered lattice (no overlaps)"}
+    for ax, crowd in zip(axes[0], crowds, strict=True):
+        mine = [r for r in rows if r["crowd"] == crowd]
+        for worlds, style in zip(sorted({r["worlds"] for r in mine}), ("o-", "s-", "^-"), strict=False):
+            sel = sorted((r for r in mine if r["worlds"] == worlds), key=lambda r: r["n"])
+            ax.plot([r["n"] for r in sel], [r["crowdbench"] / 1e6 for r in sel], style,
+                    label=f"crowdbench, {worlds} world{'s' if worlds > 1 else ''}")
+        first = min(r["worlds"] for r in mine)
+        sel = sorted((r for r in mine if r["worlds"] == first), key=lambda r: r["n"])
+        ax.plot([r["n"] for r in sel], [r["rvo2"] / 1e6 for r in sel], "k--", label="Python-RVO2 (k-d tree)")
+        ax.set_xscale("log")
+        ns = sorted({r["n"] for r in mine})
+        ax.set_xticks(ns, [f"{n:,}" for n in ns])
+        ax.minorticks_off()
+        ax.set_ylim(bottom=0)
+        ax.set_xlabel("people per world, N")
+        ax.set_ylabel("M agent-steps per CPU second")
+        ax.set_title(f"ORCA, {names.get(crowd, crowd)}")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    with atomic_path(path, suffix=".png") as tmp:
+        fig.savefig(tmp, format="png")
+    plt.close(fig)
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--rounds", type=int, default=5)
@@ -138,7 +178,15 @@ def main() -> None:
                    help="crowdbench's side: orca_batch + the position update in numpy (batch) or orca_advance "
                         "(RVO2's doStep in one call, arrays in blocks)")
     p.add_argument("--json", help="also write the results here")
+    p.add_argument("--plot", help="draw the scaling figure here (PNG)")
+    p.add_argument("--from-json", help="read the results of an earlier --json run instead of measuring")
     a = p.parse_args()
+    if a.from_json:
+        with open(a.from_json) as f:
+            rows = json.load(f)
+        if a.plot:
+            plot(rows, a.plot)
+        return
     with contextlib.suppress(OSError):
         os.sched_setaffinity(0, {0})
     crowdbench_run(bench_crowd(100, 1), 1, 2)  # compile (or load the cache) outside the timer
@@ -155,8 +203,10 @@ def main() -> None:
                       f"{' '.join(f'{x:.2f}' for x in r['ratios'])} | {statistics.median(r['ratios']):.2f} |",
                       flush=True)
     if a.json:
-        with open(a.json, "w") as f:
+        with atomic_path(a.json) as tmp, open(tmp, "w") as f:
             json.dump(rows, f, indent=1)
+    if a.plot:
+        plot(rows, a.plot)
 
 
 if __name__ == "__main__":

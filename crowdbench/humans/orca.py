@@ -270,7 +270,18 @@ class PyRVOSimulator:
         self._obst = build_obstacles(self._obstacles)
 
     def getNumObstacleVertices(self) -> int:
+        """Obstacle vertices after :meth:`processObstacles` — RVO2's count, edges split by its obstacle tree
+        included."""
         return len(self._obst[0])
+
+    def getObstacleVertex(self, vertex_no: int) -> tuple[float, float]:
+        return float(self._obst[0][vertex_no, 0]), float(self._obst[0][vertex_no, 1])
+
+    def getNextObstacleVertexNo(self, vertex_no: int) -> int:
+        return int(self._obst[1][vertex_no])
+
+    def getPrevObstacleVertexNo(self, vertex_no: int) -> int:
+        return int(self._obst[2][vertex_no])
 
     # --- simulation
     def doStep(self) -> None:

@@ -1,17 +1,23 @@
 """RVO2 (van den Berg et al., ORCA) ported line-for-line to numba, batched over worlds and agents.
 
 Source of truth: the reference C++ library, RVO2 2.0.x (``Agent::computeNeighbors``, ``Agent::computeNewVelocity``,
-``linearProgram1/2/3``, ``KdTree::queryObstacleTreeRecursive``, ``RVOSimulator::addObstacle``). Differences:
+``linearProgram1/2/3``, ``KdTree::buildObstacleTreeRecursive``, ``KdTree::queryObstacleTreeRecursive``,
+``RVOSimulator::addObstacle``). Differences:
 
 * computed in float64 (the C++ library uses float32; see ``tests/data/README.md`` for the tolerances this meets);
 * agent neighbours are found by brute force in small crowds and on a grid of cells above ``GRID_MIN`` agents
   (the cells around an agent ranked, then the rows of cells that the k-th distance still reaches — RVO2's kd-tree
   query with its shrinking range, on cells; the cell lists and the ranking are :mod:`crowdbench.spatial`'s, shared
-  with the world's kernels), obstacle edges by brute force. The result is the same set — the
-  ``max_neighbors`` nearest agents strictly within ``neighbor_dist`` sorted by squared distance, and the obstacle
-  edges within ``time_horizon_obst * max_speed + radius`` seen from their right side — only exact distance *ties*
-  may be ordered differently (RVO2 keeps kd-tree visiting order; here it is index order, on either path: the grid
-  and the brute force give bit-identical velocities, tested at N = 200 and 1,000);
+  with the world's kernels). The same set as RVO2's — the ``max_neighbors`` nearest agents strictly within
+  ``neighbor_dist`` sorted by squared distance —, only exact distance *ties* may be ordered differently (RVO2
+  keeps kd-tree visiting order; here it is index order, on either path: the grid and the brute force give
+  bit-identical velocities, tested at N = 200 and 1,000);
+* obstacle edges are RVO2's after its obstacle tree split them (``KdTree::buildObstacleTree``, :func:`build_obstacles`);
+  an agent's obstacle neighbours — the edges within ``time_horizon_obst * max_speed + radius`` seen from their
+  right side — are found on that tree above ``OBST_TREE_MIN`` vertices and by a scan of every edge below, in RVO2's
+  order either way, ties included: for obstacles they are systematic (the two edges of a corner nearest to an
+  agent are equally far) and decide which edge makes the constraint (the scan orders them by the tree,
+  :func:`_visited_before`);
 * each agent may ignore one other agent (``ignore``), used by the latent-responsive crowd to hide the robot.
 
 All worlds share one obstacle set. Obstacles are stored RVO2-style as vertices with ``next``/``prev`` links,
@@ -41,9 +47,13 @@ RVO_EPSILON = 1e-5
 
 
 def build_obstacles(polygons: Sequence[Sequence[tuple[float, float]]]) -> tuple[np.ndarray, ...]:
-    """RVO2's ``addObstacle`` for each polygon (vertices counter-clockwise; 2 vertices = a two-sided segment).
+    """RVO2's ``addObstacle`` for each polygon (vertices counter-clockwise; 2 vertices = a two-sided segment), then
+    its ``processObstacles``: the obstacle tree (:func:`_obstacle_tree`), which splits some edges in two.
 
-    Returns ``(point (V, 2), next (V,), prev (V,), unit_dir (V, 2), convex (V,))``.
+    Returns ``(point (V, 2), next (V,), prev (V,), unit_dir (V, 2), convex (V,), tree (V, 6))`` — ``V`` vertices
+    after the splits (RVO2's ``getNumObstacleVertices``), each the start of one edge. ``tree`` int64: columns 0–4
+    describe node ``k`` (the root is node 0) — its edge, left child, right child (-1: none), parent (-1: the root),
+    depth —, column 5 the node of edge ``k``.
     """
     pts, nxt, prv, udir, convex = [], [], [], [], []
     for poly in polygons:
@@ -56,14 +66,103 @@ def build_obstacles(polygons: Sequence[Sequence[tuple[float, float]]]) -> tuple[
             nxt.append(base + (i + 1) % n)
             prv.append(base + (i - 1) % n)
             d = np.subtract(v[(i + 1) % n], v[i])
-            udir.append(d / np.hypot(*d))
+            udir.append(tuple(d / np.hypot(*d)))
             if n == 2:
                 convex.append(True)
             else:
                 a, b, c = v[(i - 1) % n], v[i], v[(i + 1) % n]
                 convex.append(_left_of(a, b, c) >= 0.0)
+    nodes = _obstacle_tree(pts, nxt, prv, udir, convex)
+    tree = np.full((len(nodes), 6), -1, np.int64)
+    for k, (edge, left, right) in enumerate(nodes):
+        tree[k, :3] = edge, left, right
+        tree[edge, 5] = k
+        for child in (left, right):
+            if child >= 0:
+                tree[child, 3] = k
+    tree[:, 4] = 0
+    for k in range(1, len(nodes)):  # parents come before their children
+        tree[k, 4] = tree[tree[k, 3], 4] + 1
     return (np.asarray(pts, np.float64).reshape(-1, 2), np.asarray(nxt, np.int64), np.asarray(prv, np.int64),
-            np.asarray(udir, np.float64).reshape(-1, 2), np.asarray(convex, np.bool_))
+            np.asarray(udir, np.float64).reshape(-1, 2), np.asarray(convex, np.bool_), tree)
+
+
+def _obstacle_tree(pts: list, nxt: list, prv: list, udir: list, convex: list) -> list[list[int]]:
+    """RVO2's ``KdTree::buildObstacleTreeRecursive`` (c2c46ba ``src/KdTree.cpp:127-245``) on the vertex lists, which
+    it extends in place where it splits an edge (a new convex vertex at the split point, appended; links updated).
+
+    Each node takes the edge whose line leaves the fewest edges on its larger side (then on its smaller side; the
+    first such edge in list order), the others go left (``leftOf ≥ −ε`` at both ends), right (``≤ ε``) or are split
+    at the line; the left subtree is built before the right one (splits there change links the right side sees).
+    Computed in float32 on the float32-rounded vertices, as RVO2 does, so that the same edges are chosen and split
+    at the same points (a split point is kept at its float32 value; the polygons' own vertices stay float64).
+    Returns the nodes ``[edge, left, right]``, root first."""
+    f32 = np.float32
+    nodes: list[list[int]] = []
+    todo: list[tuple[list[int], int, int]] = [(list(range(len(pts))), -1, 0)]  # (edges, parent node, side)
+    while todo:
+        edges, parent, side = todo.pop()
+        if not edges:
+            continue
+        e = np.asarray(edges)
+        p32 = np.asarray(pts, f32)
+        a, b = p32[e], p32[np.asarray(nxt)[e]]
+        l1, l2 = _left_of_lines(a, b, a), _left_of_lines(a, b, b)
+        eps = f32(RVO_EPSILON)
+        is_left = (l1 >= -eps) & (l2 >= -eps)
+        is_right = ~is_left & (l1 <= eps) & (l2 <= eps)
+        split = ~is_left & ~is_right
+        np.fill_diagonal(is_left, False)
+        np.fill_diagonal(is_right, False)
+        np.fill_diagonal(split, False)
+        n_left = is_left.sum(1) + split.sum(1)
+        n_right = is_right.sum(1) + split.sum(1)
+        big, small = np.maximum(n_left, n_right), np.minimum(n_left, n_right)
+        i = int(np.lexsort((small, big))[0])  # stable: the first of the best
+        node = len(nodes)
+        nodes.append([edges[i], -1, -1])
+        if parent >= 0:
+            nodes[parent][side] = node
+        left_edges: list[int] = []
+        right_edges: list[int] = []
+        i1 = edges[i]
+        i2 = nxt[i1]
+        for j, j1 in enumerate(edges):
+            if j == i:
+                continue
+            if is_left[i, j]:
+                left_edges.append(j1)
+            elif is_right[i, j]:
+                right_edges.append(j1)
+            else:  # split edge j1 → j2 where the line of i1 → i2 crosses it (float32, as RVO2)
+                j2 = nxt[j1]
+                (ix1, iy1), (ix2, iy2), (jx1, jy1), (jx2, jy2) = p32[i1], p32[i2], p32[j1], p32[j2]
+                t = (((ix2 - ix1) * (jy1 - iy1) - (iy2 - iy1) * (jx1 - ix1))
+                     / ((ix2 - ix1) * (jy1 - jy2) - (iy2 - iy1) * (jx1 - jx2)))
+                new = len(pts)
+                pts.append((float(jx1 + t * (jx2 - jx1)), float(jy1 + t * (jy2 - jy1))))
+                prv.append(j1)
+                nxt.append(j2)
+                convex.append(True)
+                udir.append(udir[j1])
+                nxt[j1] = new
+                prv[j2] = new
+                if l1[i, j] > 0.0:
+                    left_edges.append(j1)
+                    right_edges.append(new)
+                else:
+                    right_edges.append(j1)
+                    left_edges.append(new)
+        todo.append((right_edges, node, 2))  # popped after the whole left subtree
+        todo.append((left_edges, node, 1))
+    return nodes
+
+
+def _left_of_lines(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """RVO2's ``leftOf(a_i, b_i, c_j)`` for every line ``i`` (through ``a_i``, ``b_i``) and point ``j``: ``(I, J)``, in
+    the inputs' dtype."""
+    return ((a[:, None, 0] - c[None, :, 0]) * (b[:, None, 1] - a[:, None, 1])
+            - (a[:, None, 1] - c[None, :, 1]) * (b[:, None, 0] - a[:, None, 0]))
 
 
 def _left_of(a, b, c) -> float:
@@ -185,36 +284,134 @@ def _cutoff_circle_line(vx, vy, cx, cy, rad, lp, ld, n):
     lp[n, 0], lp[n, 1] = cx + rad * wx, cy + rad * wy
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _edge_dsq(o, px, py, range_sq, opoint, onext):  # pragma: no cover - numba
+    """Squared distance [m²] from the point to edge ``o`` if the edge is an obstacle neighbour of an agent there —
+    seen from its right side, nearer than ``range_sq`` (``KdTree::queryObstacleTreeRecursive``'s tests) —, else
+    inf."""
+    o2 = onext[o]
+    ax, ay = opoint[o, 0], opoint[o, 1]
+    bx, by = opoint[o2, 0], opoint[o2, 1]
+    left = (ax - px) * (by - ay) - (ay - py) * (bx - ax)  # leftOf(a, b, agent)
+    abx, aby = bx - ax, by - ay
+    ab2 = abx * abx + aby * aby
+    if left * left / ab2 >= range_sq or left >= 0.0:
+        return np.inf
+    rr = ((px - ax) * abx + (py - ay) * aby) / ab2
+    if rr < 0.0:
+        dsq = (px - ax) ** 2 + (py - ay) ** 2
+    elif rr > 1.0:
+        dsq = (px - bx) ** 2 + (py - by) ** 2
+    else:
+        dsq = (px - ax - rr * abx) ** 2 + (py - ay - rr * aby) ** 2
+    return dsq if dsq < range_sq else np.inf
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _visited_before(e1, e2, px, py, opoint, onext, otree):  # pragma: no cover - numba
+    """Whether RVO2's obstacle-tree query from (``px``, ``py``) (:func:`_tree_obstacle_neighbors`) reaches edge
+    ``e1`` before edge ``e2`` (both reached): at their nearest common node, the subtree on the agent's side of its
+    line comes first, then the node, then the far subtree."""
+    a, b = otree[e1, 5], otree[e2, 5]
+    da, db = otree[a, 4], otree[b, 4]
+    ca = cb = -1  # the children of the common node on the way to a and to b (-1: a or b is that node)
+    while da > db:
+        ca, a, da = a, otree[a, 3], da - 1
+    while db > da:
+        cb, b, db = b, otree[b, 3], db - 1
+    while a != b:
+        ca, cb, a, b = a, b, otree[a, 3], otree[b, 3]
+    o = otree[a, 0]
+    o2 = onext[o]
+    ax, ay = opoint[o, 0], opoint[o, 1]
+    left = (ax - px) * (opoint[o2, 1] - ay) - (ay - py) * (opoint[o2, 0] - ax)
+    near = otree[a, 1] if left >= 0.0 else otree[a, 2]
+    if ca == -1:  # e1's node is the common one: e1 comes first iff e2 lies on the far side
+        return cb != near
+    return ca == near
+
+
 @nb.njit(cache=True, error_model="numpy")
-def _obstacle_lines(px, py, vx, vy, r, th_obst, max_speed, opoint, onext, oprev, odir, oconvex, lp, ld, ob_idx, ob_d):
-    """Obstacle neighbours + obstacle ORCA lines of one agent; returns the number of lines written."""
-    V = opoint.shape[0]
-    range_sq = (th_obst * max_speed + r) ** 2
+def _obstacle_neighbors(px, py, range_sq, opoint, onext, otree, ob_idx, ob_d):  # pragma: no cover - numba
+    """Every obstacle neighbour of an agent at (``px``, ``py``) by a scan of all edges, sorted by squared distance
+    into ``ob_d``/``ob_idx`` — equal distances (the two edges of a corner nearest to the agent) in the order RVO2's
+    tree query reaches them (:func:`_visited_before`), as :func:`_tree_obstacle_neighbors`. Returns their count."""
     n_ob = 0
-    for o in range(V):
-        o2 = onext[o]
-        ax, ay = opoint[o, 0], opoint[o, 1]
-        bx, by = opoint[o2, 0], opoint[o2, 1]
-        left = (ax - px) * (by - ay) - (ay - py) * (bx - ax)  # leftOf(a, b, agent)
-        abx, aby = bx - ax, by - ay
-        ab2 = abx * abx + aby * aby
-        if left * left / ab2 >= range_sq or left >= 0.0:
-            continue
-        rr = ((px - ax) * abx + (py - ay) * aby) / ab2
-        if rr < 0.0:
-            dsq = (px - ax) ** 2 + (py - ay) ** 2
-        elif rr > 1.0:
-            dsq = (px - bx) ** 2 + (py - by) ** 2
-        else:
-            dsq = (px - ax - rr * abx) ** 2 + (py - ay - rr * aby) ** 2
-        if dsq < range_sq:
+    for o in range(opoint.shape[0]):
+        dsq = _edge_dsq(o, px, py, range_sq, opoint, onext)
+        if dsq < np.inf:
             k = n_ob
-            while k != 0 and dsq < ob_d[k - 1]:
+            while k != 0 and (dsq < ob_d[k - 1] or (dsq == ob_d[k - 1]
+                                                    and _visited_before(o, ob_idx[k - 1], px, py, opoint, onext,
+                                                                        otree))):
                 ob_d[k], ob_idx[k] = ob_d[k - 1], ob_idx[k - 1]
                 k -= 1
             ob_d[k], ob_idx[k] = dsq, o
             n_ob += 1
+    return n_ob
 
+
+OBST_TREE_MIN = 512
+"""Obstacle sets with more vertices (after RVO2's splits) than this are searched on the tree
+(:func:`_tree_obstacle_neighbors`), smaller ones by a scan of every edge (:func:`_obstacle_neighbors`); both give
+the same neighbours in the same order. Per query (one core, range 5.31 m, ``benchmarks/bench_orca_obstacles.py``'s
+pillar halls): 52 vertices scan 0.12 µs, tree 0.25; 364 scan 1.08 / 0.72 µs, tree 1.48 / 0.54 (dense / sparse
+pillars); 964 scan 1.97, tree 1.02; 1,524 scan 3.30, tree 1.71. A module constant, not an argument: an omitted
+argument's compile-time default made numba's ``orca_batch`` 2.4× slower."""
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _tree_obstacle_neighbors(px, py, range_sq, opoint, onext, otree, stack, ob_idx, ob_d):  # pragma: no cover
+    """Every obstacle neighbour of an agent at (``px``, ``py``) on RVO2's obstacle tree (``otree`` from
+    :func:`build_obstacles`), in RVO2's order: ``KdTree::queryObstacleTreeRecursive`` — the agent's side of each
+    node's line first, then the node's edge if the agent sees it from its right side and its line is in range, then
+    the far side — with ``Agent::insertObstacleNeighbor``'s insertion (sorted by squared distance, equal distances
+    in visiting order). The recursion runs on ``stack`` (scratch ``(2·V + 2, 2)`` int64). Returns the count."""
+    n_ob = 0
+    if otree.shape[0] == 0:
+        return 0
+    stack[0, 0], stack[0, 1] = 0, 0
+    sp = 1
+    while sp > 0:
+        sp -= 1
+        nd, phase = stack[sp, 0], stack[sp, 1]
+        o = otree[nd, 0]
+        o2 = onext[o]
+        ax, ay = opoint[o, 0], opoint[o, 1]
+        bx, by = opoint[o2, 0], opoint[o2, 1]
+        left = (ax - px) * (by - ay) - (ay - py) * (bx - ax)  # leftOf(a, b, agent)
+        if phase == 0:  # the agent's side first, then come back to this node
+            stack[sp, 0], stack[sp, 1] = nd, 1
+            sp += 1
+            child = otree[nd, 1] if left >= 0.0 else otree[nd, 2]
+            if child >= 0:
+                stack[sp, 0], stack[sp, 1] = child, 0
+                sp += 1
+            continue
+        abx, aby = bx - ax, by - ay
+        ab2 = abx * abx + aby * aby
+        if left * left / ab2 < range_sq:
+            if left < 0.0:
+                dsq = _edge_dsq(o, px, py, range_sq, opoint, onext)
+                if dsq < np.inf:
+                    k = n_ob
+                    while k != 0 and dsq < ob_d[k - 1]:
+                        ob_d[k], ob_idx[k] = ob_d[k - 1], ob_idx[k - 1]
+                        k -= 1
+                    ob_d[k], ob_idx[k] = dsq, o
+                    n_ob += 1
+            child = otree[nd, 2] if left >= 0.0 else otree[nd, 1]
+            if child >= 0:
+                stack[sp, 0], stack[sp, 1] = child, 0
+                sp += 1
+    return n_ob
+
+
+@nb.njit(cache=True, error_model="numpy")
+def _obstacle_lines(px, py, vx, vy, r, th_obst, opoint, onext, oprev, odir, oconvex, lp, ld, ob_idx,
+                    n_ob):  # pragma: no cover - numba
+    """The ORCA lines of one agent's obstacle neighbours ``ob_idx[:n_ob]`` (nearest first); returns the number of
+    lines written."""
     inv_th = 1.0 / th_obst
     n = 0
     radius_sq = r * r
@@ -478,7 +675,7 @@ GRID_MAX_CELL = 0.5
 
 @nb.njit(cache=True, error_model="numpy")
 def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, time_horizon, time_horizon_obst,
-               active, controlled, ignore, opoint, onext, oprev, odir, oconvex, dt, out, grid_min=GRID_MIN):
+               active, controlled, ignore, opoint, onext, oprev, odir, oconvex, otree, dt, out, grid_min=GRID_MIN):
     """New ORCA velocities for every controlled agent of every world.
 
     Args (``B`` worlds, ``A`` agents, ``V`` obstacle vertices; floats in m, s, m/s):
@@ -488,7 +685,8 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
         active: ``(B, A)`` bool; inactive agents are nobody's neighbour and are not computed.
         controlled: ``(B, A)`` bool; uncontrolled agents (e.g. the robot) are neighbours only; ``out`` = ``vel``.
         ignore: ``(B, A)`` int; agent ``i`` never takes agent ``ignore[b, i]`` as a neighbour (-1: none).
-        opoint, onext, oprev, odir, oconvex: obstacles from :func:`build_obstacles` (shared by all worlds).
+        opoint, onext, oprev, odir, oconvex, otree: obstacles and their tree from :func:`build_obstacles` (shared
+            by all worlds).
         dt: time step [s] (used for the collision cut-off when agents already overlap).
         out: ``(B, A, 2)`` output velocities.
         grid_min: a world with more active agents finds neighbours on a grid of cells (:func:`_grid_nearest`,
@@ -513,6 +711,8 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
     inv_dt = 1.0 / dt
     cell_start, cell_of, sx, sy, sidx, geo = _grid_scratch(A)
     rank = np.empty(RANK_MAX, np.int64)
+    ostack = np.empty((2 * otree.shape[0] + 2, 2), np.int64)
+    use_tree = V > OBST_TREE_MIN
     for b in range(B):
         for j in range(A):
             if active[b, j] and not (np.isfinite(pos[b, j, 0]) and np.isfinite(pos[b, j, 1])):
@@ -535,8 +735,14 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
             ms = max_speed[b, i]
             n = 0
             if V > 0:
-                n = _obstacle_lines(px, py, vx, vy, r, time_horizon_obst[b, i], ms, opoint, onext, oprev, odir,
-                                    oconvex, lp, ld, ob_idx, ob_d)
+                th_obst = time_horizon_obst[b, i]
+                ob_range_sq = (th_obst * ms + r) ** 2
+                if use_tree:
+                    n_ob = _tree_obstacle_neighbors(px, py, ob_range_sq, opoint, onext, otree, ostack, ob_idx, ob_d)
+                else:
+                    n_ob = _obstacle_neighbors(px, py, ob_range_sq, opoint, onext, otree, ob_idx, ob_d)
+                n = _obstacle_lines(px, py, vx, vy, r, th_obst, opoint, onext, oprev, odir, oconvex, lp, ld, ob_idx,
+                                    n_ob)
             n_obst = n
             # agent neighbours: nearest max_neighbors strictly within neighbor_dist, sorted, stable on ties
             k_max = max_neighbors[b, i]
@@ -597,7 +803,7 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
 
 
 @nb.njit(cache=True, error_model="numpy")
-def orca_advance(vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex, dt):  # pragma: no cover - numba
+def orca_advance(vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex, otree, dt):  # pragma: no cover - numba
     """One ORCA simulation step in place, RVO2's ``doStep``: new velocities (:func:`orca_batch`), then every active
     agent's position advanced by its new velocity times ``dt`` [s]. Agent arrays in blocks (one argument each
     instead of twelve, so a call on one small world costs little more than its arithmetic): ``vec`` ``(4, B, A, 2)`` —
@@ -607,7 +813,7 @@ def orca_advance(vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex, dt)
     controlled; obstacles from :func:`build_obstacles`."""
     pos, vel, out = vec[0], vec[1], vec[3]
     orca_batch(pos, vel, vec[2], flt[0], flt[1], flt[2], ints[0], flt[3], flt[4], flags[0], flags[1], ints[1], opoint,
-               onext, oprev, odir, oconvex, dt, out)
+               onext, oprev, odir, oconvex, otree, dt, out)
     active = flags[0]
     B, A = pos.shape[0], pos.shape[1]
     for b in range(B):
@@ -659,7 +865,8 @@ def orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals
 
 @nb.njit(cache=True, error_model="numpy")
 def orca_step(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active, ignore_robot,
-              pad, dt, pref_speed, vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex):  # pragma: no cover
+              pad, dt, pref_speed, vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex,
+              otree):  # pragma: no cover - numba
     """:func:`orca_inputs` then :func:`orca_batch` in one compiled call (the pedestrian model's step), on agent
     arrays packed in blocks (one argument each instead of thirteen): ``vec`` ``(4, B, A, 2)`` — positions,
     velocities, preferred velocities, out: new velocities —, ``flt`` ``(5, B, A)`` — radii, max speeds (both
@@ -670,4 +877,4 @@ def orca_step(robot_pos, robot_vel, robot_radius, positions, velocities, goals, 
     orca_inputs(robot_pos, robot_vel, robot_radius, positions, velocities, goals, radii, v_pref, active, ignore_robot,
                 pad, dt, pref_speed, pos, vel, pref, rad, vmax, act, ignore)
     orca_batch(pos, vel, pref, rad, vmax, flt[2], ints[0], flt[3], flt[4], act, flags[1], ignore, opoint, onext,
-               oprev, odir, oconvex, dt, out)
+               oprev, odir, oconvex, otree, dt, out)

@@ -368,3 +368,121 @@ def test_orca_advance_is_orca_batch_then_the_position_update():
         np.testing.assert_array_equal(vec[1], vel)
         np.testing.assert_array_equal(vec[0], pos)
     assert np.array_equal(vec[0, 0, 3], start[0, 3])  # the inactive agent stays
+
+
+def _pillar_field(rng: np.random.Generator, count: int) -> list[list[tuple[float, float]]]:
+    """Obstacles of many kinds over a 24 × 24 m square: square and triangular pillars (counter-clockwise), a
+    non-convex L, two-sided segments, one long diagonal wall (many cells of its bounding box hold no part of it)."""
+    polys: list[list[tuple[float, float]]] = [[(-12.0, -12.0), (12.0, 11.0)],
+                                              [(4.0, 4.0), (7.0, 4.0), (7.0, 5.0), (5.0, 5.0), (5.0, 7.0), (4.0, 7.0)]]
+    for k in range(count):
+        x, y = rng.uniform(-11.0, 11.0, 2)
+        s = rng.uniform(0.2, 0.8)
+        if k % 3 == 0:
+            polys.append([(x, y), (x + s, y), (x + s, y + s), (x, y + s)])
+        elif k % 3 == 1:
+            polys.append([(x, y), (x + s, y), (x + 0.5 * s, y + s)])
+        else:
+            polys.append([(x, y), (x + s, y + rng.uniform(-s, s))])
+    return polys
+
+
+def test_the_edge_scan_and_the_obstacle_tree_give_the_same_neighbours_in_the_same_order():
+    """An agent's obstacle neighbours by a scan of every edge equal those of RVO2's tree query — the same edges in
+    the same order, ties (corners, two crossing segments) in the tree's visiting order — for points inside the
+    field, at its edges and far outside; the ties are many, and often not in index order."""
+    from crowdbench.humans.orca_kernel import _obstacle_neighbors, _tree_obstacle_neighbors, build_obstacles
+
+    rng = np.random.default_rng(7)
+    opoint, onext, _, _, _, otree = build_obstacles(_pillar_field(rng, 60))
+    V = len(opoint)
+    stack = np.empty((2 * V + 2, 2), np.int64)
+    pts = np.concatenate([rng.uniform(-14.0, 14.0, (3000, 2)), [[40.0, 40.0], [-30.0, 0.0]]])
+    found = ties = reordered = 0
+    for px, py in pts:
+        for reach in (0.8, 2.5, 5.3):
+            a_idx, a_d = np.empty(V + 1, np.int64), np.empty(V + 1)
+            b_idx, b_d = np.empty(V + 1, np.int64), np.empty(V + 1)
+            na = _obstacle_neighbors(px, py, reach**2, opoint, onext, otree, a_idx, a_d)
+            nb = _tree_obstacle_neighbors(px, py, reach**2, opoint, onext, otree, stack, b_idx, b_d)
+            assert na == nb
+            np.testing.assert_array_equal(a_idx[:na], b_idx[:nb])
+            np.testing.assert_array_equal(a_d[:na], b_d[:nb])
+            found += na
+            tied = a_d[1:na] == a_d[: max(na - 1, 0)]
+            ties += int(tied.sum())
+            reordered += int((tied & (a_idx[1:na] < a_idx[: max(na - 1, 0)])).sum())  # the tree, not the index, decided
+    assert found > 10_000 and ties > 1_000 and reordered > 100
+
+
+def test_obstacle_tree_splits_edges_as_rvo2_does():
+    """``processObstacles`` gives RVO2's obstacle vertices — its tree's splits included — with the same numbers,
+    links and (float32) positions (when Python-RVO2 is installed)."""
+    rvo2 = pytest.importorskip("rvo2")
+    polys = _pillar_field(np.random.default_rng(3), 40)
+    sims = [PyRVOSimulator(0.25, 10.0, 10, 5.0, 5.0, 0.3, 1.0), rvo2.PyRVOSimulator(0.25, 10.0, 10, 5.0, 5.0, 0.3,
+                                                                                     1.0)]
+    for sim in sims:
+        for poly in polys:
+            sim.addObstacle([(float(x), float(y)) for x, y in poly])
+        sim.processObstacles()
+    n = sims[1].getNumObstacleVertices()
+    assert sims[0].getNumObstacleVertices() == n > sum(len(p) for p in polys)  # edges were split
+    for v in range(n):
+        assert sims[0].getNextObstacleVertexNo(v) == sims[1].getNextObstacleVertexNo(v)
+        assert sims[0].getPrevObstacleVertexNo(v) == sims[1].getPrevObstacleVertexNo(v)
+        np.testing.assert_allclose(sims[0].getObstacleVertex(v), sims[1].getObstacleVertex(v), atol=1e-5)
+
+
+@pytest.mark.parametrize(("n", "spacing"), [(200, 3.0), pytest.param(1000, 4.0, marks=pytest.mark.slow)])
+def test_among_pillars_each_step_agrees_with_rvo2_unless_on_a_switch(n, spacing):
+    """Given RVO2's state at each of 20 steps (``n`` people crossing a hall of pillars: 364 obstacle vertices, the
+    edge scan; 964, the obstacle tree), ``PyRVOSimulator``'s next velocities equal RVO2's within 1e-3 m/s — except
+    where the state lies on one of ORCA's switches (a constraint covered or not, a program feasible or not), which
+    float32 and float64 may take either way: there a shift of
+    the agent by at most 1e-6 m gives RVO2's velocity. (Before the obstacle tree's order, a corner's two edges came
+    in index order and an agent's velocity differed by 0.43 m/s, robust to shifts of 1e-4 m.)"""
+    rvo2 = pytest.importorskip("rvo2")
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "bench_orca_obstacles", Path(__file__).resolve().parents[2] / "benchmarks" / "bench_orca_obstacles.py")
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    from crowdbench.humans import preferred_velocity
+
+    start, polys = bench.pillar_hall(n, spacing)
+
+    def make(cls):
+        sim = cls(0.25, 10.0, 10, 5.0, 5.0, 0.31, 1.0)
+        for p in start:
+            sim.addAgent((float(p[0]), float(p[1])))
+        for poly in polys:
+            sim.addObstacle([(float(x), float(y)) for x, y in poly])
+        sim.processObstacles()
+        return sim
+
+    def step(sim, state, pref, shift=None):
+        for i, (p, v) in enumerate(state):
+            sim.setAgentPosition(i, p)
+            sim.setAgentVelocity(i, v)
+            sim.setAgentPrefVelocity(i, (float(pref[i, 0]), float(pref[i, 1])))
+        if shift is not None:
+            i, d = shift
+            sim.setAgentPosition(i, (state[i][0][0] + d[0], state[i][0][1] + d[1]))
+        sim.doStep()
+        return np.array([sim.getAgentVelocity(i) for i in range(n)])
+
+    ref, ours = make(rvo2.PyRVOSimulator), make(PyRVOSimulator)
+    rng = np.random.default_rng(0)
+    apart = 0
+    for _ in range(20):
+        state = [(ref.getAgentPosition(i), ref.getAgentVelocity(i)) for i in range(n)]
+        pref = preferred_velocity(np.array([s[0] for s in state]), -start, np.ones(n), 0.25)
+        want, got = step(ref, state, pref), step(ours, state, pref)
+        for i in np.flatnonzero(np.abs(got - want).max(1) > 1e-3):
+            apart += 1
+            shifted = [step(ours, state, pref, (i, rng.uniform(-1e-6, 1e-6, 2)))[i] for _ in range(8)]
+            assert min(np.abs(v - want[i]).max() for v in shifted) < 1e-3, f"agent {i}: {got[i]} vs {want[i]}"
+    assert apart <= n // 50  # a few switches among 20·n agent-steps
+    assert ours.getNumObstacleVertices() == ref.getNumObstacleVertices()
