@@ -131,9 +131,8 @@ def compare(n: int, worlds: int, crowd: str, rounds: int, target: int, api: str 
 
 
 def plot(rows: list[dict], path: str) -> None:
-    """The scaling figure: median M agent-steps/s against N (log axis), crowdbench per world count and RVO2 (one
-    simulator per world, so its rate hardly depends on the world count: the one-world runs are drawn), one panel per
-    crowd."""
+    """The scaling figure: median M agent-steps/s against N (log axis) of crowdbench (solid) and RVO2 (dashed, one
+    simulator per world), per world count, one panel per crowd."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -144,13 +143,13 @@ def plot(rows: list[dict], path: str) -> None:
     names = {"circle": "ring (overlaps from N ≈ 100)", "grid": "jittered lattice (no overlaps)"}
     for ax, crowd in zip(axes[0], crowds, strict=True):
         mine = [r for r in rows if r["crowd"] == crowd]
-        for worlds, style in zip(sorted({r["worlds"] for r in mine}), ("o-", "s-", "^-"), strict=False):
+        for worlds, colour in zip(sorted({r["worlds"] for r in mine}), ("C0", "C1", "C2", "C3"), strict=False):
             sel = sorted((r for r in mine if r["worlds"] == worlds), key=lambda r: r["n"])
-            ax.plot([r["n"] for r in sel], [r["crowdbench"] / 1e6 for r in sel], style,
-                    label=f"crowdbench, {worlds} world{'s' if worlds > 1 else ''}")
-        first = min(r["worlds"] for r in mine)
-        sel = sorted((r for r in mine if r["worlds"] == first), key=lambda r: r["n"])
-        ax.plot([r["n"] for r in sel], [r["rvo2"] / 1e6 for r in sel], "k--", label="Python-RVO2 (k-d tree)")
+            label = f"{worlds} world{'s' if worlds > 1 else ''}"
+            ax.plot([r["n"] for r in sel], [r["crowdbench"] / 1e6 for r in sel], "o-", color=colour,
+                    label=f"crowdbench, {label}")
+            ax.plot([r["n"] for r in sel], [r["rvo2"] / 1e6 for r in sel], "s--", color=colour, alpha=0.7,
+                    label=f"Python-RVO2, {label}")
         ax.set_xscale("log")
         ns = sorted({r["n"] for r in mine})
         ax.set_xticks(ns, [f"{n:,}" for n in ns])

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdbench.humans.base import CrowdState, HumanModel, register
-from crowdbench.humans.orca_kernel import build_obstacles, orca_batch, orca_step
+from crowdbench.humans.orca_kernel import build_obstacles, orca_batch, orca_neighbors, orca_step
 from crowdbench.validate import check_fields
 
 
@@ -183,6 +183,8 @@ class PyRVOSimulator:
         self._pending: list[list[tuple[float, float]]] = []
         self._obstacles: list[list[tuple[float, float]]] = []
         self._obst = build_obstacles([])
+        self._last: tuple | None = None  # the state the last doStep started from (for the neighbour queries)
+        self._neighbors: tuple[np.ndarray, ...] | None = None
 
     # --- agents
     def addAgent(self, pos, neighborDist=None, maxNeighbors=None, timeHorizon=None, timeHorizonObst=None,
@@ -274,6 +276,39 @@ class PyRVOSimulator:
         included."""
         return len(self._obst[0])
 
+    # --- neighbours of the last step (RVO2: computed in doStep from the state it started from)
+    def _neighbor_lists(self) -> tuple[np.ndarray, ...]:
+        if self._last is None:
+            raise RuntimeError("agent neighbours exist after doStep; valid choices: call doStep first")
+        if self._neighbors is None:
+            pos, par = self._last
+            n, V = pos.shape[1], len(self._obst[0])
+            k = max(int(par[1].max()), 1)
+            out = (np.empty((1, n, k), np.int64), np.empty((1, n), np.int64), np.empty((1, n, max(V, 1)), np.int64),
+                   np.empty((1, n), np.int64))
+            orca_neighbors(pos, par[4], par[5], par[0], par[1].astype(np.int64), par[3], np.ones((1, n), bool),
+                           np.full((1, n), -1, np.int64), self._obst[0], self._obst[1], self._obst[5], *out)
+            self._neighbors = out
+        return self._neighbors
+
+    def getAgentNumAgentNeighbors(self, agent_no: int) -> int:
+        return int(self._neighbor_lists()[1][0, agent_no])
+
+    def getAgentAgentNeighbor(self, agent_no: int, neighbor_no: int) -> int:
+        nb, cnt = self._neighbor_lists()[:2]
+        if not 0 <= neighbor_no < cnt[0, agent_no]:
+            raise IndexError(f"neighbor_no={neighbor_no}; valid choices: 0 … {cnt[0, agent_no] - 1}")
+        return int(nb[0, agent_no, neighbor_no])
+
+    def getAgentNumObstacleNeighbors(self, agent_no: int) -> int:
+        return int(self._neighbor_lists()[3][0, agent_no])
+
+    def getAgentObstacleNeighbor(self, agent_no: int, neighbor_no: int) -> int:
+        nb, cnt = self._neighbor_lists()[2:]
+        if not 0 <= neighbor_no < cnt[0, agent_no]:
+            raise IndexError(f"neighbor_no={neighbor_no}; valid choices: 0 … {cnt[0, agent_no] - 1}")
+        return int(nb[0, agent_no, neighbor_no])
+
     def getObstacleVertex(self, vertex_no: int) -> tuple[float, float]:
         return float(self._obst[0][vertex_no, 0]), float(self._obst[0][vertex_no, 1])
 
@@ -300,4 +335,5 @@ class PyRVOSimulator:
         new_pos = pos + out * self.time_step
         self._vel = out[0].tolist()
         self._pos = new_pos[0].tolist()
+        self._last, self._neighbors = (pos, par), None
         self.global_time += self.time_step

@@ -803,6 +803,69 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
 
 
 @nb.njit(cache=True, error_model="numpy")
+def orca_neighbors(pos, radius, max_speed, neighbor_dist, max_neighbors, time_horizon_obst, active, ignore, opoint,
+                   onext, otree, agent_nb, agent_cnt, obst_nb, obst_cnt, grid_min=GRID_MIN):  # pragma: no cover
+    """Each active agent's neighbours as :func:`orca_batch` finds them (the same searches, the same order: RVO2's
+    ``agentNeighbors_`` and ``obstacleNeighbors_``), for inspection and tests; same arguments as ``orca_batch``.
+
+    Out: ``agent_nb`` ``(B, A, K)`` int64 (K ≥ the largest ``max_neighbors``) and ``agent_cnt`` ``(B, A)`` — agent
+    indices, nearest first; ``obst_nb`` ``(B, A, V)`` and ``obst_cnt`` — obstacle edges (their first vertex's
+    number), nearest first. Inactive agents get counts 0."""
+    B, A = pos.shape[0], pos.shape[1]
+    V = opoint.shape[0]
+    cand_idx = np.empty(A + 8, np.int64)
+    cand_d = np.empty(A + 8)
+    near_idx = np.empty(A + 8, np.int64)
+    near_d = np.empty(A + 8)
+    nb_idx = np.empty(A + 1, np.int64)
+    nb_d = np.empty(A + 1)
+    ob_idx = np.empty(V + 1, np.int64)
+    ob_d = np.empty(V + 1)
+    cell_start, cell_of, sx, sy, sidx, geo = _grid_scratch(A)
+    rank = np.empty(RANK_MAX, np.int64)
+    ostack = np.empty((2 * otree.shape[0] + 2, 2), np.int64)
+    for b in range(B):
+        use_grid = grid_min < A and _count_members(active, b, 0) > grid_min
+        if use_grid:
+            reach = 0.0
+            for j in range(A):
+                reach = max(reach, neighbor_dist[b, j])
+            _build_grid(pos, active, b, reach * GRID_MAX_CELL, GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx, geo)
+        for i in range(A):
+            agent_cnt[b, i] = obst_cnt[b, i] = 0
+            if not active[b, i]:
+                continue
+            px, py = pos[b, i, 0], pos[b, i, 1]
+            if V > 0:
+                ob_range_sq = (time_horizon_obst[b, i] * max_speed[b, i] + radius[b, i]) ** 2
+                if V > OBST_TREE_MIN:
+                    n_ob = _tree_obstacle_neighbors(px, py, ob_range_sq, opoint, onext, otree, ostack, ob_idx, ob_d)
+                else:
+                    n_ob = _obstacle_neighbors(px, py, ob_range_sq, opoint, onext, otree, ob_idx, ob_d)
+                obst_cnt[b, i] = n_ob
+                obst_nb[b, i, :n_ob] = ob_idx[:n_ob]
+            k_max = max_neighbors[b, i]
+            range_sq = neighbor_dist[b, i] ** 2
+            skip = ignore[b, i]
+            cnt = 0
+            if k_max > 0 and use_grid:
+                cnt = _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx,
+                                    rank, nb_d, nb_idx, near_d, near_idx)
+            elif k_max > 0:
+                m = 0
+                for j in range(A):
+                    if j == i or j == skip or not active[b, j]:  # noqa: SIM109 (numba-friendly)
+                        continue
+                    dsq = (px - pos[b, j, 0]) ** 2 + (py - pos[b, j, 1]) ** 2
+                    if dsq < range_sq:
+                        cand_d[m], cand_idx[m] = dsq, j
+                        m += 1
+                cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+            agent_cnt[b, i] = cnt
+            agent_nb[b, i, :cnt] = nb_idx[:cnt]
+
+
+@nb.njit(cache=True, error_model="numpy")
 def orca_advance(vec, flt, ints, flags, opoint, onext, oprev, odir, oconvex, otree, dt):  # pragma: no cover - numba
     """One ORCA simulation step in place, RVO2's ``doStep``: new velocities (:func:`orca_batch`), then every active
     agent's position advanced by its new velocity times ``dt`` [s]. Agent arrays in blocks (one argument each

@@ -240,33 +240,6 @@ def pref_velocity_batch(pos: np.ndarray, goal: np.ndarray) -> np.ndarray:
     return d / np.maximum(np.linalg.norm(d, axis=-1, keepdims=True), 1.0)
 
 
-@pytest.mark.parametrize("n", [200, 1000])
-def test_facade_agrees_with_python_rvo2_on_a_large_crowd(n):
-    """On a crowd in which nobody overlaps at the start (the jittered lattice of ``crowdbench.bench.bench_crowd``),
-    ``PyRVOSimulator`` (float64, grid neighbour search) and Python-RVO2 (float32, kd-tree) agree within 1e-3 m after
-    20 steps (when Python-RVO2 is installed: benchmarks/bench_peers.py says how to build it)."""
-    rvo2 = pytest.importorskip("rvo2")
-    from crowdbench.bench import bench_crowd
-
-    pos = bench_crowd(n, 1, "grid")[0]
-    goal = -pos
-    sims = [PyRVOSimulator(0.25, 10.0, 10, 5.0, 5.0, 0.31, 1.0), rvo2.PyRVOSimulator(0.25, 10.0, 10, 5.0, 5.0, 0.31,
-                                                                                      1.0)]
-    for sim in sims:
-        for p in pos:
-            sim.addAgent((float(p[0]), float(p[1])))
-        sim.processObstacles()
-    for _ in range(20):
-        for sim in sims:
-            here = np.array([sim.getAgentPosition(i) for i in range(n)])
-            pref = pref_velocity_batch(here, goal)
-            for i in range(n):
-                sim.setAgentPrefVelocity(i, (float(pref[i, 0]), float(pref[i, 1])))
-            sim.doStep()
-    a, b = (np.array([s.getAgentPosition(i) for i in range(n)]) for s in sims)
-    assert np.abs(a - b).max() < 1e-3
-
-
 KERNEL_OUTPUTS = Path(__file__).resolve().parents[1] / "data" / "orca_kernel_outputs.npz"
 
 
@@ -434,55 +407,97 @@ def test_obstacle_tree_splits_edges_as_rvo2_does():
         np.testing.assert_allclose(sims[0].getObstacleVertex(v), sims[1].getObstacleVertex(v), atol=1e-5)
 
 
-@pytest.mark.parametrize(("n", "spacing"), [(200, 3.0), pytest.param(1000, 4.0, marks=pytest.mark.slow)])
-def test_among_pillars_each_step_agrees_with_rvo2_unless_on_a_switch(n, spacing):
-    """Given RVO2's state at each of 20 steps (``n`` people crossing a hall of pillars: 364 obstacle vertices, the
-    edge scan; 964, the obstacle tree), ``PyRVOSimulator``'s next velocities equal RVO2's within 1e-3 m/s — except
-    where the state lies on one of ORCA's switches (a constraint covered or not, a program feasible or not), which
-    float32 and float64 may take either way: there a shift of
-    the agent by at most 1e-6 m gives RVO2's velocity. (Before the obstacle tree's order, a corner's two edges came
-    in index order and an agent's velocity differed by 0.43 m/s, robust to shifts of 1e-4 m.)"""
-    rvo2 = pytest.importorskip("rvo2")
-    import importlib.util
+RVO2_LARGE = Path(__file__).resolve().parents[1] / "data" / "orca_rvo2_large.npz"
 
-    spec = importlib.util.spec_from_file_location(
-        "bench_orca_obstacles", Path(__file__).resolve().parents[2] / "benchmarks" / "bench_orca_obstacles.py")
-    bench = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(bench)
+
+def _rvo2_large(name: str) -> tuple[dict[str, np.ndarray], PyRVOSimulator]:
+    """A scenario of ``tests/data/orca_rvo2_large.npz`` (written by ``tests/data/make_rvo2_references.py`` from
+    Python-RVO2) and a ``PyRVOSimulator`` holding its agents and obstacles."""
+    with np.load(RVO2_LARGE) as d:
+        sc = {k.split("/", 1)[1]: d[k] for k in d.files if k.startswith(name + "/")}
+    sim = PyRVOSimulator(0.25, 10.0, 10, 5.0, 5.0, 0.31, 1.0)
+    for q in sc["start"]:
+        sim.addAgent((float(q[0]), float(q[1])))
+    if "polygons" in sc:
+        for poly in np.split(sc["polygons"], np.cumsum(sc["polygon_sizes"])[:-1]):
+            sim.addObstacle([(float(x), float(y)) for x, y in poly])
+    sim.processObstacles()
+    return sc, sim
+
+
+def _step_from(sim: PyRVOSimulator, start: np.ndarray, pos: np.ndarray, vel: np.ndarray,
+               shift: tuple[int, np.ndarray] | None = None) -> np.ndarray:
+    """Set every agent to ``pos``/``vel`` (RVO2's state; agent ``shift[0]`` moved by ``shift[1]``), preferred
+    velocities toward −start as the reference run set them, one ``doStep``; returns the new velocities."""
     from crowdbench.humans import preferred_velocity
 
-    start, polys = bench.pillar_hall(n, spacing)
+    n = len(start)
+    pref = preferred_velocity(pos, -start, np.ones(n), 0.25)
+    for i in range(n):
+        sim.setAgentPosition(i, (float(pos[i, 0]), float(pos[i, 1])))
+        sim.setAgentVelocity(i, (float(vel[i, 0]), float(vel[i, 1])))
+        sim.setAgentPrefVelocity(i, (float(pref[i, 0]), float(pref[i, 1])))
+    if shift is not None:
+        i, d = shift
+        sim.setAgentPosition(i, (float(pos[i, 0] + d[0]), float(pos[i, 1] + d[1])))
+    sim.doStep()
+    return np.array([sim.getAgentVelocity(i) for i in range(n)])
 
-    def make(cls):
-        sim = cls(0.25, 10.0, 10, 5.0, 5.0, 0.31, 1.0)
-        for p in start:
-            sim.addAgent((float(p[0]), float(p[1])))
-        for poly in polys:
-            sim.addObstacle([(float(x), float(y)) for x, y in poly])
-        sim.processObstacles()
-        return sim
 
-    def step(sim, state, pref, shift=None):
-        for i, (p, v) in enumerate(state):
-            sim.setAgentPosition(i, p)
-            sim.setAgentVelocity(i, v)
+@pytest.mark.parametrize("name", ["lattice-200", "lattice-1000", "pillars-200", "pillars-1000"])
+def test_neighbours_are_rvo2s_in_rvo2s_order(name):
+    """During each of the first three steps of RVO2's runs (``tests/data/orca_rvo2_large.npz``: 200 and 1,000 people
+    on a lattice, and crossing halls of pillars with 364 and 964 obstacle vertices — the edge scan and the obstacle
+    tree), every agent's agent neighbours and obstacle neighbours are RVO2's, in RVO2's order."""
+    sc, sim = _rvo2_large(name)
+    n = len(sc["start"])
+    with_obstacles = 0
+    for k in range(3):
+        _step_from(sim, sc["start"], sc["pos"][k].astype(np.float64), sc["vel"][k].astype(np.float64))
+        for i in range(n):
+            got = [sim.getAgentAgentNeighbor(i, j) for j in range(sim.getAgentNumAgentNeighbors(i))]
+            assert got == [x for x in sc["agent_nb"][k, i] if x >= 0], (k, i)
+            got = [sim.getAgentObstacleNeighbor(i, j) for j in range(sim.getAgentNumObstacleNeighbors(i))]
+            assert got == [x for x in sc["obst_nb"][k, i] if x >= 0], (k, i)
+            with_obstacles += len(got) > 1
+    assert (with_obstacles > n) == name.startswith("pillars")
+
+
+@pytest.mark.parametrize("n", [200, 1000])
+def test_a_large_lattice_crowd_ends_where_rvo2s_does(n):
+    """From RVO2's start, 20 steps of ``PyRVOSimulator`` (float64) end within 1e-3 m of RVO2's run (float32)."""
+    sc, sim = _rvo2_large(f"lattice-{n}")
+    start = sc["start"]
+    for _ in range(20):
+        here = np.array([sim.getAgentPosition(i) for i in range(n)])
+        from crowdbench.humans import preferred_velocity
+
+        pref = preferred_velocity(here, -start, np.ones(n), 0.25)
+        for i in range(n):
             sim.setAgentPrefVelocity(i, (float(pref[i, 0]), float(pref[i, 1])))
-        if shift is not None:
-            i, d = shift
-            sim.setAgentPosition(i, (state[i][0][0] + d[0], state[i][0][1] + d[1]))
         sim.doStep()
-        return np.array([sim.getAgentVelocity(i) for i in range(n)])
+    end = np.array([sim.getAgentPosition(i) for i in range(n)])
+    assert list(sc["steps"]) == [0, 1, 2, 3, 20]
+    assert np.abs(end - sc["pos"][-1]).max() < 1e-3
 
-    ref, ours = make(rvo2.PyRVOSimulator), make(PyRVOSimulator)
+
+@pytest.mark.parametrize("name", ["pillars-200", "pillars-1000"])
+def test_among_pillars_each_step_agrees_with_rvo2_unless_on_a_switch(name):
+    """Given RVO2's state at every step of its runs among pillars (200 people, 364 obstacle vertices, 20 steps; 1,000
+    people, 964 vertices, 10 steps), ``PyRVOSimulator``'s next velocities equal RVO2's within 1e-3 m/s — except
+    where the state lies on one of ORCA's switches (a constraint covered or not, a program feasible or not), which
+    float32 and float64 may take either way: there a shift of the agent by at most 1e-6 m gives RVO2's velocity.
+    (Before the obstacle tree's order, a corner's two edges came in index order and an agent's velocity differed by
+    0.43 m/s, robust to shifts of 1e-4 m.)"""
+    sc, sim = _rvo2_large(name)
+    start, n = sc["start"], len(sc["start"])
     rng = np.random.default_rng(0)
     apart = 0
-    for _ in range(20):
-        state = [(ref.getAgentPosition(i), ref.getAgentVelocity(i)) for i in range(n)]
-        pref = preferred_velocity(np.array([s[0] for s in state]), -start, np.ones(n), 0.25)
-        want, got = step(ref, state, pref), step(ours, state, pref)
+    for k in range(len(sc["steps"]) - 1):
+        pos, vel = sc["pos"][k].astype(np.float64), sc["vel"][k].astype(np.float64)
+        want, got = sc["vel"][k + 1], _step_from(sim, start, pos, vel)
         for i in np.flatnonzero(np.abs(got - want).max(1) > 1e-3):
             apart += 1
-            shifted = [step(ours, state, pref, (i, rng.uniform(-1e-6, 1e-6, 2)))[i] for _ in range(8)]
-            assert min(np.abs(v - want[i]).max() for v in shifted) < 1e-3, f"agent {i}: {got[i]} vs {want[i]}"
-    assert apart <= n // 50  # a few switches among 20·n agent-steps
-    assert ours.getNumObstacleVertices() == ref.getNumObstacleVertices()
+            shifted = [_step_from(sim, start, pos, vel, (i, rng.uniform(-1e-6, 1e-6, 2)))[i] for _ in range(8)]
+            assert min(np.abs(v - want[i]).max() for v in shifted) < 1e-3, f"step {k} agent {i}: {got[i]} vs {want[i]}"
+    assert apart <= n // 50  # a few switches among the agent-steps
