@@ -15,7 +15,8 @@ A run is ``episodes`` × ``steps`` steps, each episode from the start state, so 
 ``steps`` = 20 (fewer for large batches), ``episodes`` such that a run has about ``--target`` agent-steps. Before
 every step the preferred velocities (``crowdbench.humans.preferred_velocity`` toward the goal = −start, speed 1)
 are set outside the timer; only ``orca_batch`` + the position update in numpy (crowdbench; with ``--api advance``
-``orca_advance``, both in one call) and ``doStep`` (RVO2, which
+``orca_advance``, both in one call; with ``--api facade`` the drop-in ``crowdbench.humans.orca.PyRVOSimulator``'s
+``doStep``, driven exactly as RVO2) and ``doStep`` (RVO2, which
 updates positions itself) are timed, in process CPU time (``time.process_time``), pinned to one core.
 
 Prints per configuration the median agent-steps/s of each and the ratio crowdbench / RVO2 of every round;
@@ -89,17 +90,19 @@ def crowdbench_advance_run(start: np.ndarray, episodes: int, steps: int) -> floa
     return episodes * steps * B * N / elapsed
 
 
-def rvo2_run(start: np.ndarray, episodes: int, steps: int) -> float:
-    """Agent-steps per CPU second of Python-RVO2's ``doStep`` on ``start`` ``(B, N, 2)``, one simulator per world."""
+def rvo2_run(start: np.ndarray, episodes: int, steps: int, simulator: type | None = None) -> float:
+    """Agent-steps per CPU second of Python-RVO2's ``doStep`` on ``start`` ``(B, N, 2)``, one simulator per world
+    (``simulator``: another class with its API, e.g. crowdbench's drop-in ``PyRVOSimulator``)."""
     import rvo2
 
+    simulator = simulator or rvo2.PyRVOSimulator
     B, N = start.shape[:2]
     goal, f = -start, np.ones(N)
     elapsed = 0.0
     for _ in range(episodes):
         sims = []
         for w in range(B):
-            sim = rvo2.PyRVOSimulator(DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, HORIZON, RADIUS, MAX_SPEED)
+            sim = simulator(DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, HORIZON, RADIUS, MAX_SPEED)
             for i in range(N):
                 sim.addAgent((float(start[w, i, 0]), float(start[w, i, 1])))
             sim.processObstacles()
@@ -121,7 +124,10 @@ def compare(n: int, worlds: int, crowd: str, rounds: int, target: int, api: str 
     start = bench_crowd(n, worlds, crowd)
     episodes, steps = plan(n, worlds, target)
     ours, peer = [], []
-    run = crowdbench_run if api == "batch" else crowdbench_advance_run
+    from crowdbench.humans.orca import PyRVOSimulator
+
+    run = {"batch": crowdbench_run, "advance": crowdbench_advance_run,
+           "facade": lambda *a: rvo2_run(*a, simulator=PyRVOSimulator)}[api]
     for _ in range(rounds):
         ours.append(run(start, episodes, steps))
         peer.append(rvo2_run(start, episodes, steps))
@@ -173,9 +179,9 @@ def main() -> None:
     p.add_argument("--worlds", type=int, nargs="+", default=[1, 64])
     p.add_argument("--crowds", nargs="+", default=["circle", "grid"])
     p.add_argument("--target", type=int, default=100_000, help="agent-steps per run")
-    p.add_argument("--api", choices=["batch", "advance"], default="batch",
-                   help="crowdbench's side: orca_batch + the position update in numpy (batch) or orca_advance "
-                        "(RVO2's doStep in one call, arrays in blocks)")
+    p.add_argument("--api", choices=["batch", "advance", "facade"], default="batch",
+                   help="crowdbench's side: orca_batch + the position update in numpy (batch), orca_advance "
+                        "(RVO2's doStep in one call, arrays in blocks) or the drop-in PyRVOSimulator (facade)")
     p.add_argument("--json", help="also write the results here")
     p.add_argument("--plot", help="draw the scaling figure here (PNG)")
     p.add_argument("--from-json", help="read the results of an earlier --json run instead of measuring")

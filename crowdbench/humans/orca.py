@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from crowdbench.humans.base import CrowdState, HumanModel, register
-from crowdbench.humans.orca_kernel import build_obstacles, orca_batch, orca_neighbors, orca_step
+from crowdbench.humans.orca_kernel import build_obstacles, orca_advance, orca_neighbors, orca_step
 from crowdbench.validate import check_fields
 
 
@@ -176,10 +176,14 @@ class PyRVOSimulator:
         self.defaults = (float(neighborDist), int(maxNeighbors), float(timeHorizon), float(timeHorizonObst),
                          float(radius), float(maxSpeed), (float(velocity[0]), float(velocity[1])))
         self.global_time = 0.0
-        self._pos: list[list[float]] = []
-        self._vel: list[list[float]] = []
-        self._pref: list[list[float]] = []
-        self._par: list[list[float]] = []  # neighborDist, maxNeighbors, timeHorizon, timeHorizonObst, radius, maxSpeed
+        # agents in orca_advance's blocks, one world: positions, velocities, preferred velocities, scratch [m, m/s];
+        # radii, max speeds, neighbour distances, time horizons, obstacle time horizons; neighbour caps, ignored
+        # slot; active, controlled
+        self._vec = np.zeros((4, 1, 0, 2))
+        self._flt = np.zeros((5, 1, 0))
+        self._int = np.zeros((2, 1, 0), np.int64)
+        self._flags = np.ones((2, 1, 0), bool)
+        self._xy: list[list[float]] | None = None  # positions as Python lists, made on demand (fast getters)
         self._pending: list[list[tuple[float, float]]] = []
         self._obstacles: list[list[tuple[float, float]]] = []
         self._obst = build_obstacles([])
@@ -190,63 +194,89 @@ class PyRVOSimulator:
     def addAgent(self, pos, neighborDist=None, maxNeighbors=None, timeHorizon=None, timeHorizonObst=None,
                  radius=None, maxSpeed=None, velocity=None) -> int:
         d = self.defaults
-        given = (neighborDist, maxNeighbors, timeHorizon, timeHorizonObst, radius, maxSpeed)
-        self._par.append([float(g if g is not None else dv) for g, dv in zip(given, d[:6], strict=True)])
+        nd, mn, th, tho, r, ms = (g if g is not None else dv for g, dv in
+                                  zip((neighborDist, maxNeighbors, timeHorizon, timeHorizonObst, radius, maxSpeed),
+                                      d[:6], strict=True))
         v = velocity if velocity is not None else d[6]
-        self._pos.append([float(pos[0]), float(pos[1])])
-        self._vel.append([float(v[0]), float(v[1])])
-        self._pref.append([0.0, 0.0])
-        return len(self._pos) - 1
+        vec = np.zeros((4, 1, 1, 2))
+        vec[0, 0, 0], vec[1, 0, 0] = (float(pos[0]), float(pos[1])), (float(v[0]), float(v[1]))
+        self._vec = np.concatenate([self._vec, vec], axis=2)
+        self._flt = np.concatenate([self._flt, np.array([r, ms, nd, th, tho], float).reshape(5, 1, 1)], axis=2)
+        self._int = np.concatenate([self._int, np.array([int(mn), -1], np.int64).reshape(2, 1, 1)], axis=2)
+        self._flags = np.concatenate([self._flags, np.ones((2, 1, 1), bool)], axis=2)
+        self._xy = None
+        return self._vec.shape[2] - 1
 
     def getNumAgents(self) -> int:
-        return len(self._pos)
+        return self._vec.shape[2]
 
     def _check(self, agent_no: int) -> int:
-        if not 0 <= agent_no < len(self._pos):
-            raise IndexError(f"agent_no={agent_no} out of range; {len(self._pos)} agents")
+        if not 0 <= agent_no < self._vec.shape[2]:
+            raise IndexError(f"agent_no={agent_no} out of range; {self._vec.shape[2]} agents")
         return agent_no
 
+    def _set2(self, block: int, agent_no: int, xy) -> None:
+        i = self._check(agent_no)
+        self._vec[block, 0, i, 0] = float(xy[0])
+        self._vec[block, 0, i, 1] = float(xy[1])
+
+    def _own_parameters(self) -> None:
+        """Before a parameter changes: the last step's neighbour queries keep the parameters it ran with."""
+        if self._last is not None and self._last[1] is self._flt:
+            self._last = (self._last[0], self._flt.copy(), self._int.copy())
+
     def setAgentPrefVelocity(self, agent_no: int, velocity) -> None:
-        self._pref[self._check(agent_no)] = [float(velocity[0]), float(velocity[1])]
+        self._set2(2, agent_no, velocity)
 
     def setAgentPosition(self, agent_no: int, position) -> None:
-        self._pos[self._check(agent_no)] = [float(position[0]), float(position[1])]
+        self._set2(0, agent_no, position)
+        self._xy = None
 
     def setAgentVelocity(self, agent_no: int, velocity) -> None:
-        self._vel[self._check(agent_no)] = [float(velocity[0]), float(velocity[1])]
+        self._set2(1, agent_no, velocity)
 
     def setAgentRadius(self, agent_no: int, radius: float) -> None:
-        self._par[self._check(agent_no)][4] = float(radius)
+        self._own_parameters()
+        self._flt[0, 0, self._check(agent_no)] = float(radius)
 
     def setAgentMaxSpeed(self, agent_no: int, max_speed: float) -> None:
-        self._par[self._check(agent_no)][5] = float(max_speed)
+        self._own_parameters()
+        self._flt[1, 0, self._check(agent_no)] = float(max_speed)
 
     def setAgentNeighborDist(self, agent_no: int, dist: float) -> None:
-        self._par[self._check(agent_no)][0] = float(dist)
+        self._own_parameters()
+        self._flt[2, 0, self._check(agent_no)] = float(dist)
 
     def setAgentMaxNeighbors(self, agent_no: int, n: int) -> None:
-        self._par[self._check(agent_no)][1] = int(n)
+        self._own_parameters()
+        self._int[0, 0, self._check(agent_no)] = int(n)
 
     def setAgentTimeHorizon(self, agent_no: int, t: float) -> None:
-        self._par[self._check(agent_no)][2] = float(t)
+        self._own_parameters()
+        self._flt[3, 0, self._check(agent_no)] = float(t)
 
     def setAgentTimeHorizonObst(self, agent_no: int, t: float) -> None:
-        self._par[self._check(agent_no)][3] = float(t)
+        self._own_parameters()
+        self._flt[4, 0, self._check(agent_no)] = float(t)
 
     def getAgentPosition(self, agent_no: int) -> tuple[float, float]:
-        return tuple(self._pos[self._check(agent_no)])
+        if self._xy is None:
+            self._xy = self._vec[0, 0].tolist()
+        return tuple(self._xy[self._check(agent_no)])
 
     def getAgentVelocity(self, agent_no: int) -> tuple[float, float]:
-        return tuple(self._vel[self._check(agent_no)])
+        i = self._check(agent_no)
+        return float(self._vec[1, 0, i, 0]), float(self._vec[1, 0, i, 1])
 
     def getAgentPrefVelocity(self, agent_no: int) -> tuple[float, float]:
-        return tuple(self._pref[self._check(agent_no)])
+        i = self._check(agent_no)
+        return float(self._vec[2, 0, i, 0]), float(self._vec[2, 0, i, 1])
 
     def getAgentRadius(self, agent_no: int) -> float:
-        return self._par[self._check(agent_no)][4]
+        return float(self._flt[0, 0, self._check(agent_no)])
 
     def getAgentMaxSpeed(self, agent_no: int) -> float:
-        return self._par[self._check(agent_no)][5]
+        return float(self._flt[1, 0, self._check(agent_no)])
 
     def getGlobalTime(self) -> float:
         return self.global_time
@@ -281,13 +311,13 @@ class PyRVOSimulator:
         if self._last is None:
             raise RuntimeError("agent neighbours exist after doStep; valid choices: call doStep first")
         if self._neighbors is None:
-            pos, par = self._last
+            pos, flt, ints = self._last
             n, V = pos.shape[1], len(self._obst[0])
-            k = max(int(par[1].max()), 1)
+            k = max(int(ints[0].max()), 1)
             out = (np.empty((1, n, k), np.int64), np.empty((1, n), np.int64), np.empty((1, n, max(V, 1)), np.int64),
                    np.empty((1, n), np.int64))
-            orca_neighbors(pos, par[4], par[5], par[0], par[1].astype(np.int64), par[3], np.ones((1, n), bool),
-                           np.full((1, n), -1, np.int64), self._obst[0], self._obst[1], self._obst[5], *out)
+            orca_neighbors(pos, flt[0], flt[1], flt[2], ints[0], flt[4], np.ones((1, n), bool), ints[1],
+                           self._obst[0], self._obst[1], self._obst[5], *out)
             self._neighbors = out
         return self._neighbors
 
@@ -320,20 +350,10 @@ class PyRVOSimulator:
 
     # --- simulation
     def doStep(self) -> None:
-        """Advance all agents by one time step (synchronous: all new velocities from the old state)."""
-        n = len(self._pos)
-        if n == 0:
-            self.global_time += self.time_step
-            return
-        pos = np.asarray(self._pos)[None]
-        vel = np.asarray(self._vel)[None]
-        par = np.asarray(self._par).T[:, None, :]
-        out = np.empty_like(vel)
-        orca_batch(pos, vel, np.asarray(self._pref)[None], par[4], par[5], par[0], par[1].astype(np.int64),
-                   par[2], par[3], np.ones((1, n), bool), np.ones((1, n), bool), np.full((1, n), -1, np.int64),
-                   *self._obst, self.time_step, out)
-        new_pos = pos + out * self.time_step
-        self._vel = out[0].tolist()
-        self._pos = new_pos[0].tolist()
-        self._last, self._neighbors = (pos, par), None
+        """Advance all agents by one time step (synchronous: all new velocities from the old state), in place:
+        :func:`~crowdbench.humans.orca_kernel.orca_advance` on the agent blocks."""
+        if self._vec.shape[2]:
+            self._last, self._neighbors = (self._vec[0].copy(), self._flt, self._int), None  # parameters: copy on write
+            orca_advance(self._vec, self._flt, self._int, self._flags, *self._obst, self.time_step)
+            self._xy = None
         self.global_time += self.time_step
