@@ -659,6 +659,22 @@ def _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, ge
     return cnt
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _brute_nearest(b, i, skip, px, py, range_sq, k_max, pos, active, cand_d, cand_idx, nb_d, nb_idx,
+                   rank):  # pragma: no cover - numba
+    """The ``k_max`` nearest active agents of world ``b`` (not ``i``, not ``skip``) strictly within ``range_sq`` of
+    (``px``, ``py``) by brute force, into ``nb_d``/``nb_idx`` sorted (distance, then index); returns their count."""
+    m = 0
+    for j in range(pos.shape[1]):
+        if j == i or j == skip or not active[b, j]:  # noqa: SIM109 (numba-friendly)
+            continue
+        dsq = (px - pos[b, j, 0]) ** 2 + (py - pos[b, j, 1]) ** 2
+        if dsq < range_sq:
+            cand_d[m], cand_idx[m] = dsq, j
+            m += 1
+    return _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+
+
 GRID_MIN = 32
 """Worlds with more active agents than this find neighbours on a grid (:func:`_grid_nearest`), smaller ones by
 brute force; both give the same neighbours in the same order. The break-even against Python-RVO2 (alternated, one
@@ -753,15 +769,8 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
                 cnt = _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx,
                                     rank, nb_d, nb_idx, near_d, near_idx)
             elif k_max > 0:
-                m = 0
-                for j in range(A):
-                    if j == i or j == skip or not active[b, j]:  # noqa: SIM109 (numba-friendly)
-                        continue
-                    dsq = (px - pos[b, j, 0]) ** 2 + (py - pos[b, j, 1]) ** 2
-                    if dsq < range_sq:
-                        cand_d[m], cand_idx[m] = dsq, j
-                        m += 1
-                cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+                cnt = _brute_nearest(b, i, skip, px, py, range_sq, k_max, pos, active, cand_d, cand_idx, nb_d, nb_idx,
+                                     rank)
             inv_th = 1.0 / time_horizon[b, i]
             for k in range(cnt):
                 j = nb_idx[k]
@@ -852,15 +861,8 @@ def orca_neighbors(pos, radius, max_speed, neighbor_dist, max_neighbors, time_ho
                 cnt = _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx,
                                     rank, nb_d, nb_idx, near_d, near_idx)
             elif k_max > 0:
-                m = 0
-                for j in range(A):
-                    if j == i or j == skip or not active[b, j]:  # noqa: SIM109 (numba-friendly)
-                        continue
-                    dsq = (px - pos[b, j, 0]) ** 2 + (py - pos[b, j, 1]) ** 2
-                    if dsq < range_sq:
-                        cand_d[m], cand_idx[m] = dsq, j
-                        m += 1
-                cnt = _select(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+                cnt = _brute_nearest(b, i, skip, px, py, range_sq, k_max, pos, active, cand_d, cand_idx, nb_d, nb_idx,
+                                     rank)
             agent_cnt[b, i] = cnt
             agent_nb[b, i, :cnt] = nb_idx[:cnt]
 
