@@ -184,6 +184,7 @@ class PyRVOSimulator:
         self._int = np.zeros((2, 1, 0), np.int64)
         self._flags = np.ones((2, 1, 0), bool)
         self._xy: list[list[float]] | None = None  # positions as Python lists, made on demand (fast getters)
+        self._new: list[tuple] = []  # agents added since the blocks were last extended (:meth:`_flush`)
         self._pending: list[list[tuple[float, float]]] = []
         self._obstacles: list[list[tuple[float, float]]] = []
         self._obst = build_obstacles([])
@@ -198,19 +199,31 @@ class PyRVOSimulator:
                                   zip((neighborDist, maxNeighbors, timeHorizon, timeHorizonObst, radius, maxSpeed),
                                       d[:6], strict=True))
         v = velocity if velocity is not None else d[6]
-        vec = np.zeros((4, 1, 1, 2))
-        vec[0, 0, 0], vec[1, 0, 0] = (float(pos[0]), float(pos[1])), (float(v[0]), float(v[1]))
+        self._new.append((float(pos[0]), float(pos[1]), float(v[0]), float(v[1]), float(r), float(ms), float(nd),
+                          float(th), float(tho), int(mn)))
+        return self.getNumAgents() - 1
+
+    def _flush(self) -> None:
+        """Append the agents added since the last flush to the blocks, in one copy (adding agents one by one stays
+        linear in their number)."""
+        if not self._new:
+            return
+        a = np.array(self._new, float)  # (n, 10): position, velocity, radius, max speed, neighbour distance, horizons
+        k = len(a)
+        vec = np.zeros((4, 1, k, 2))
+        vec[0, 0], vec[1, 0] = a[:, 0:2], a[:, 2:4]
+        ints = np.stack([np.array([x[9] for x in self._new], np.int64), np.full(k, -1, np.int64)])[:, None]
         self._vec = np.concatenate([self._vec, vec], axis=2)
-        self._flt = np.concatenate([self._flt, np.array([r, ms, nd, th, tho], float).reshape(5, 1, 1)], axis=2)
-        self._int = np.concatenate([self._int, np.array([int(mn), -1], np.int64).reshape(2, 1, 1)], axis=2)
-        self._flags = np.concatenate([self._flags, np.ones((2, 1, 1), bool)], axis=2)
-        self._xy = None
-        return self._vec.shape[2] - 1
+        self._flt = np.concatenate([self._flt, a[:, 4:9].T[:, None]], axis=2)
+        self._int = np.concatenate([self._int, ints], axis=2)
+        self._flags = np.concatenate([self._flags, np.ones((2, 1, k), bool)], axis=2)
+        self._new, self._xy = [], None
 
     def getNumAgents(self) -> int:
-        return self._vec.shape[2]
+        return self._vec.shape[2] + len(self._new)
 
     def _check(self, agent_no: int) -> int:
+        self._flush()
         if not 0 <= agent_no < self._vec.shape[2]:
             raise IndexError(f"agent_no={agent_no} out of range; {self._vec.shape[2]} agents")
         return agent_no
@@ -236,33 +249,40 @@ class PyRVOSimulator:
         self._set2(1, agent_no, velocity)
 
     def setAgentRadius(self, agent_no: int, radius: float) -> None:
+        i = self._check(agent_no)
         self._own_parameters()
-        self._flt[0, 0, self._check(agent_no)] = float(radius)
+        self._flt[0, 0, i] = float(radius)
 
     def setAgentMaxSpeed(self, agent_no: int, max_speed: float) -> None:
+        i = self._check(agent_no)
         self._own_parameters()
-        self._flt[1, 0, self._check(agent_no)] = float(max_speed)
+        self._flt[1, 0, i] = float(max_speed)
 
     def setAgentNeighborDist(self, agent_no: int, dist: float) -> None:
+        i = self._check(agent_no)
         self._own_parameters()
-        self._flt[2, 0, self._check(agent_no)] = float(dist)
+        self._flt[2, 0, i] = float(dist)
 
     def setAgentMaxNeighbors(self, agent_no: int, n: int) -> None:
+        i = self._check(agent_no)
         self._own_parameters()
-        self._int[0, 0, self._check(agent_no)] = int(n)
+        self._int[0, 0, i] = int(n)
 
     def setAgentTimeHorizon(self, agent_no: int, t: float) -> None:
+        i = self._check(agent_no)
         self._own_parameters()
-        self._flt[3, 0, self._check(agent_no)] = float(t)
+        self._flt[3, 0, i] = float(t)
 
     def setAgentTimeHorizonObst(self, agent_no: int, t: float) -> None:
+        i = self._check(agent_no)
         self._own_parameters()
-        self._flt[4, 0, self._check(agent_no)] = float(t)
+        self._flt[4, 0, i] = float(t)
 
     def getAgentPosition(self, agent_no: int) -> tuple[float, float]:
+        i = self._check(agent_no)
         if self._xy is None:
             self._xy = self._vec[0, 0].tolist()
-        return tuple(self._xy[self._check(agent_no)])
+        return tuple(self._xy[i])
 
     def getAgentVelocity(self, agent_no: int) -> tuple[float, float]:
         i = self._check(agent_no)
@@ -273,10 +293,12 @@ class PyRVOSimulator:
         return float(self._vec[2, 0, i, 0]), float(self._vec[2, 0, i, 1])
 
     def getAgentRadius(self, agent_no: int) -> float:
-        return float(self._flt[0, 0, self._check(agent_no)])
+        i = self._check(agent_no)
+        return float(self._flt[0, 0, i])
 
     def getAgentMaxSpeed(self, agent_no: int) -> float:
-        return float(self._flt[1, 0, self._check(agent_no)])
+        i = self._check(agent_no)
+        return float(self._flt[1, 0, i])
 
     def getGlobalTime(self) -> float:
         return self.global_time
@@ -352,6 +374,7 @@ class PyRVOSimulator:
     def doStep(self) -> None:
         """Advance all agents by one time step (synchronous: all new velocities from the old state), in place:
         :func:`~crowdbench.humans.orca_kernel.orca_advance` on the agent blocks."""
+        self._flush()
         if self._vec.shape[2]:
             self._last, self._neighbors = (self._vec[0].copy(), self._flt, self._int), None  # parameters: copy on write
             orca_advance(self._vec, self._flt, self._int, self._flags, *self._obst, self.time_step)

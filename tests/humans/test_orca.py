@@ -141,6 +141,44 @@ def test_facade_api_shape():
         sim.getAgentPosition(5)
 
 
+def test_facade_agents_added_between_steps_and_queries_are_all_there():
+    """Agents added one by one — between steps, setters, getters and neighbour queries — each get their own number
+    and parameters, and the simulation equals one built with all of them first, bit for bit."""
+    rng = np.random.default_rng(5)
+    pts = rng.uniform(-3.0, 3.0, (12, 2))
+
+    def add(sim, k):
+        return sim.addAgent((float(pts[k, 0]), float(pts[k, 1])), 4.0 + k % 3, 3 + k % 4, 2.0, 2.0, 0.2 + 0.01 * k,
+                            1.0 + 0.05 * k, (0.1 * (k % 2), 0.0))
+
+    def prefs(sim):
+        for i in range(sim.getNumAgents()):
+            sim.setAgentPrefVelocity(i, (float(-pts[i, 0]), float(-pts[i, 1])))
+
+    late = PyRVOSimulator(0.25, 5.0, 5, 2.0, 2.0, 0.3, 1.0)
+    assert [add(late, k) for k in range(5)] == list(range(5))
+    prefs(late)
+    late.doStep()
+    assert late.getAgentNumAgentNeighbors(0) >= 1
+    moved = [late.getAgentPosition(i) for i in range(5)], [late.getAgentVelocity(i) for i in range(5)]
+    assert [add(late, k) for k in range(5, 12)] == list(range(5, 12))
+    assert late.getNumAgents() == 12 and late.getAgentRadius(11) == pytest.approx(0.31)
+
+    first = PyRVOSimulator(0.25, 5.0, 5, 2.0, 2.0, 0.3, 1.0)
+    for k in range(12):
+        add(first, k)
+    for i in range(5):
+        first.setAgentPosition(i, moved[0][i])
+        first.setAgentVelocity(i, moved[1][i])
+    for sim in (late, first):
+        for _ in range(4):
+            prefs(sim)
+            sim.doStep()
+    for i in range(12):
+        assert late.getAgentPosition(i) == first.getAgentPosition(i)
+        assert late.getAgentVelocity(i) == first.getAgentVelocity(i)
+
+
 _V_PREF = {"preferred_speed": None, "neighbor_dist_range": None}
 
 
