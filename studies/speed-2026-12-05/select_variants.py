@@ -16,17 +16,12 @@ from crowdbench.spatial import RANK_MAX, insert_nearest, select_nearest
 
 
 @nb.njit(inline="always", error_model="numpy")
-def select_per_candidate(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
-    cnt = min(m, k_max)
-    discard = nb_d.shape[0] - 1
+def _finish(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
+    """``select_nearest``'s ending: ranks again with the index breaking ties if two distances are equal (the ranks'
+    sum says so), then each candidate to its slot (or the discard slot); returns the count."""
     total = 0
     for p in range(m):
-        dp = cand_d[p]
-        r = 0
-        for q in range(m):
-            r += cand_d[q] < dp
-        rank[p] = r
-        total += r
+        total += rank[p]
     if total != m * (m - 1) // 2:
         for p in range(m):
             rank[p] = 0
@@ -34,43 +29,29 @@ def select_per_candidate(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
             dq, iq = cand_d[q], cand_idx[q]
             for p in range(m):
                 rank[p] += (dq < cand_d[p]) | ((dq == cand_d[p]) & (iq < cand_idx[p]))
+    cnt = min(m, k_max)
+    discard = nb_d.shape[0] - 1
     for p in range(m):
         slot = rank[p] if rank[p] < cnt else discard
         nb_d[slot], nb_idx[slot] = cand_d[p], cand_idx[p]
     return cnt
 
+
 @nb.njit(inline="always", error_model="numpy")
-def select_padded(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
-    # float32-free: ranks via int32 accumulation over a padded length (multiple of 8), branch-free
-    cnt = min(m, k_max)
-    discard = nb_d.shape[0] - 1
-    mp = (m + 7) & ~7
-    for p in range(m, mp):
-        cand_d[p] = np.inf
-    total = 0
+def select_per_candidate(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
+    """Each candidate's rank as one reduction over all candidates (vectorised over them)."""
     for p in range(m):
         dp = cand_d[p]
         r = 0
-        for q in range(mp):
+        for q in range(m):
             r += cand_d[q] < dp
         rank[p] = r
-        total += r
-    if total != m * (m - 1) // 2:
-        for p in range(m):
-            rank[p] = 0
-        for q in range(m):
-            dq, iq = cand_d[q], cand_idx[q]
-            for p in range(m):
-                rank[p] += (dq < cand_d[p]) | ((dq == cand_d[p]) & (iq < cand_idx[p]))
-    for p in range(m):
-        slot = rank[p] if rank[p] < cnt else discard
-        nb_d[slot], nb_idx[slot] = cand_d[p], cand_idx[p]
-    return cnt
+    return _finish(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+
 
 @nb.njit(inline="always", error_model="numpy")
 def select_blocks(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
-    cnt = min(m, k_max)
-    discard = nb_d.shape[0] - 1
+    """``select_nearest``'s eight-at-a-time ranks, held in array views instead of eight scalars."""
     mp = (m + 7) & ~7
     for p in range(m, mp):
         cand_d[p] = np.inf
@@ -83,25 +64,12 @@ def select_blocks(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
             dq = cand_d[q]
             for j in range(8):
                 r8[j] += dq < d8[j]
-    total = 0
-    for p in range(m):
-        total += rank[p]
-    if total != m * (m - 1) // 2:
-        for p in range(m):
-            rank[p] = 0
-        for q in range(m):
-            dq, iq = cand_d[q], cand_idx[q]
-            for p in range(m):
-                rank[p] += (dq < cand_d[p]) | ((dq == cand_d[p]) & (iq < cand_idx[p]))
-    for p in range(m):
-        slot = rank[p] if rank[p] < cnt else discard
-        nb_d[slot], nb_idx[slot] = cand_d[p], cand_idx[p]
-    return cnt
+    return _finish(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+
 
 @nb.njit(inline="always", error_model="numpy")
 def select_outer(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
-    cnt = min(m, k_max)
-    discard = nb_d.shape[0] - 1
+    """Candidates in the outer loop, every rank updated in the inner one (vectorised over the ranks)."""
     mp = (m + 3) & ~3
     for p in range(m, mp):
         cand_d[p] = np.inf
@@ -111,20 +79,8 @@ def select_outer(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank):
         dq = cand_d[q]
         for p in range(mp):
             rank[p] += dq < cand_d[p]
-    total = 0
-    for p in range(m):
-        total += rank[p]
-    if total != m * (m - 1) // 2:
-        for p in range(m):
-            rank[p] = 0
-        for q in range(m):
-            dq, iq = cand_d[q], cand_idx[q]
-            for p in range(m):
-                rank[p] += (dq < cand_d[p]) | ((dq == cand_d[p]) & (iq < cand_idx[p]))
-    for p in range(m):
-        slot = rank[p] if rank[p] < cnt else discard
-        nb_d[slot], nb_idx[slot] = cand_d[p], cand_idx[p]
-    return cnt
+    return _finish(cand_d, cand_idx, m, k_max, nb_d, nb_idx, rank)
+
 
 @nb.njit
 def bench(D, k, mode):
