@@ -98,31 +98,38 @@ def _obstacle_tree(pts: list, nxt: list, prv: list, udir: list, convex: list) ->
     at the same points (a split point is kept at its float32 value; the polygons' own vertices stay float64).
     Returns the nodes ``[edge, left, right]``, root first."""
     f32 = np.float32
+    eps = f32(RVO_EPSILON)
+    p32 = np.zeros((2 * len(pts) + 16, 2), f32)  # the vertices in float32, room for splits (grown when full)
+    p32[: len(pts)] = np.asarray(pts, np.float64).reshape(-1, 2)
     nodes: list[list[int]] = []
     todo: list[tuple[list[int], int, int]] = [(list(range(len(pts))), -1, 0)]  # (edges, parent node, side)
     while todo:
         edges, parent, side = todo.pop()
         if not edges:
             continue
-        e = np.asarray(edges)
-        p32 = np.asarray(pts, f32)
-        a, b = p32[e], p32[np.asarray(nxt)[e]]
-        l1, l2 = _left_of_lines(a, b, a), _left_of_lines(a, b, b)
-        eps = f32(RVO_EPSILON)
-        is_left = (l1 >= -eps) & (l2 >= -eps)
-        is_right = ~is_left & (l1 <= eps) & (l2 <= eps)
-        split = ~is_left & ~is_right
-        np.fill_diagonal(is_left, False)
-        np.fill_diagonal(is_right, False)
-        np.fill_diagonal(split, False)
-        n_left = is_left.sum(1) + split.sum(1)
-        n_right = is_right.sum(1) + split.sum(1)
-        big, small = np.maximum(n_left, n_right), np.minimum(n_left, n_right)
+        a, b = p32[edges], p32[[nxt[j] for j in edges]]
+        n = len(edges)
+        big, small = np.empty(n, np.int64), np.empty(n, np.int64)
+        for r0 in range(0, n, 256):  # candidate lines in blocks of rows: memory O(256 · n), not O(n²)
+            r1 = min(n, r0 + 256)
+            l1, l2 = _left_of_lines(a[r0:r1], b[r0:r1], a), _left_of_lines(a[r0:r1], b[r0:r1], b)
+            is_left = (l1 >= -eps) & (l2 >= -eps)
+            is_right = ~is_left & (l1 <= eps) & (l2 <= eps)
+            split = ~is_left & ~is_right
+            rows = np.arange(r1 - r0)
+            for m in (is_left, is_right, split):
+                m[rows, r0 + rows] = False  # not the line's own edge
+            n_left = is_left.sum(1) + split.sum(1)
+            n_right = is_right.sum(1) + split.sum(1)
+            big[r0:r1], small[r0:r1] = np.maximum(n_left, n_right), np.minimum(n_left, n_right)
         i = int(np.lexsort((small, big))[0])  # stable: the first of the best
         node = len(nodes)
         nodes.append([edges[i], -1, -1])
         if parent >= 0:
             nodes[parent][side] = node
+        l1, l2 = _left_of_lines(a[i:i + 1], b[i:i + 1], a)[0], _left_of_lines(a[i:i + 1], b[i:i + 1], b)[0]
+        goes_left = (l1 >= -eps) & (l2 >= -eps)
+        goes_right = ~goes_left & (l1 <= eps) & (l2 <= eps)
         left_edges: list[int] = []
         right_edges: list[int] = []
         i1 = edges[i]
@@ -130,9 +137,9 @@ def _obstacle_tree(pts: list, nxt: list, prv: list, udir: list, convex: list) ->
         for j, j1 in enumerate(edges):
             if j == i:
                 continue
-            if is_left[i, j]:
+            if goes_left[j]:
                 left_edges.append(j1)
-            elif is_right[i, j]:
+            elif goes_right[j]:
                 right_edges.append(j1)
             else:  # split edge j1 → j2 where the line of i1 → i2 crosses it (float32, as RVO2)
                 j2 = nxt[j1]
@@ -140,14 +147,18 @@ def _obstacle_tree(pts: list, nxt: list, prv: list, udir: list, convex: list) ->
                 t = (((ix2 - ix1) * (jy1 - iy1) - (iy2 - iy1) * (jx1 - ix1))
                      / ((ix2 - ix1) * (jy1 - jy2) - (iy2 - iy1) * (jx1 - jx2)))
                 new = len(pts)
-                pts.append((float(jx1 + t * (jx2 - jx1)), float(jy1 + t * (jy2 - jy1))))
+                point = (jx1 + t * (jx2 - jx1), jy1 + t * (jy2 - jy1))
+                pts.append((float(point[0]), float(point[1])))
+                if new == len(p32):
+                    p32 = np.concatenate([p32, np.zeros_like(p32)])
+                p32[new] = point
                 prv.append(j1)
                 nxt.append(j2)
                 convex.append(True)
                 udir.append(udir[j1])
                 nxt[j1] = new
                 prv[j2] = new
-                if l1[i, j] > 0.0:
+                if l1[j] > 0.0:
                     left_edges.append(j1)
                     right_edges.append(new)
                 else:
