@@ -233,10 +233,14 @@ class PyRVOSimulator:
         self._vec[block, 0, i, 0] = float(xy[0])
         self._vec[block, 0, i, 1] = float(xy[1])
 
-    def _own_parameters(self) -> None:
-        """Before a parameter changes: the last step's neighbour queries keep the parameters it ran with."""
+    def _set_parameter(self, row: int, agent_no: int, value: float, ints: bool = False) -> None:
+        """Row ``row`` of the float parameters (``ints``: of the integer ones) of agent ``agent_no`` set to
+        ``value``, the agents added so far in the blocks first; the last step's neighbour queries keep the
+        parameters that step ran with (copied on this first write)."""
+        i = self._check(agent_no)
         if self._last is not None and self._last[1] is self._flt:
             self._last = (self._last[0], self._flt.copy(), self._int.copy())
+        (self._int if ints else self._flt)[row, 0, i] = value
 
     def setAgentPrefVelocity(self, agent_no: int, velocity) -> None:
         self._set2(2, agent_no, velocity)
@@ -249,34 +253,22 @@ class PyRVOSimulator:
         self._set2(1, agent_no, velocity)
 
     def setAgentRadius(self, agent_no: int, radius: float) -> None:
-        i = self._check(agent_no)
-        self._own_parameters()
-        self._flt[0, 0, i] = float(radius)
+        self._set_parameter(0, agent_no, float(radius))
 
     def setAgentMaxSpeed(self, agent_no: int, max_speed: float) -> None:
-        i = self._check(agent_no)
-        self._own_parameters()
-        self._flt[1, 0, i] = float(max_speed)
+        self._set_parameter(1, agent_no, float(max_speed))
 
     def setAgentNeighborDist(self, agent_no: int, dist: float) -> None:
-        i = self._check(agent_no)
-        self._own_parameters()
-        self._flt[2, 0, i] = float(dist)
+        self._set_parameter(2, agent_no, float(dist))
 
     def setAgentMaxNeighbors(self, agent_no: int, n: int) -> None:
-        i = self._check(agent_no)
-        self._own_parameters()
-        self._int[0, 0, i] = int(n)
+        self._set_parameter(0, agent_no, int(n), ints=True)
 
     def setAgentTimeHorizon(self, agent_no: int, t: float) -> None:
-        i = self._check(agent_no)
-        self._own_parameters()
-        self._flt[3, 0, i] = float(t)
+        self._set_parameter(3, agent_no, float(t))
 
     def setAgentTimeHorizonObst(self, agent_no: int, t: float) -> None:
-        i = self._check(agent_no)
-        self._own_parameters()
-        self._flt[4, 0, i] = float(t)
+        self._set_parameter(4, agent_no, float(t))
 
     def getAgentPosition(self, agent_no: int) -> tuple[float, float]:
         i = self._check(agent_no)

@@ -163,6 +163,11 @@ def test_facade_agents_added_between_steps_and_queries_are_all_there():
     moved = [late.getAgentPosition(i) for i in range(5)], [late.getAgentVelocity(i) for i in range(5)]
     assert [add(late, k) for k in range(5, 12)] == list(range(5, 12))
     assert late.getNumAgents() == 12 and late.getAgentRadius(11) == pytest.approx(0.31)
+    fresh = PyRVOSimulator(0.25, 5.0, 5, 2.0, 2.0, 0.3, 1.0)
+    fresh.addAgent((0.0, 0.0))
+    fresh.setAgentRadius(0, 0.45)  # right after adding, before anything else made the blocks
+    fresh.setAgentMaxNeighbors(0, 2)
+    assert fresh.getAgentRadius(0) == 0.45 and fresh.getNumAgents() == 1
 
     first = PyRVOSimulator(0.25, 5.0, 5, 2.0, 2.0, 0.3, 1.0)
     for k in range(12):
