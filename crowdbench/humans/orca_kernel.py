@@ -700,6 +700,41 @@ GRID_MAX_CELL = 0.5
 """Largest grid cell, as a fraction of the largest neighbour distance."""
 
 
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _search_scratch(A, V, otree):  # pragma: no cover - numba
+    """The neighbour searches' work arrays for ``A`` agents and ``V`` obstacle vertices: candidate, near and result
+    distances/indices of the agent search (+ 8: the spare slot of ``_gather`` and the padding of ``_select``; + 1: the
+    discard slot of ``_select``), the obstacle result, the rank buffer, the obstacle-tree stack and the grid's."""
+    cell_start, cell_of, sx, sy, sidx, geo = _grid_scratch(A)
+    return (np.empty(A + 8), np.empty(A + 8, np.int64), np.empty(A + 8), np.empty(A + 8, np.int64), np.empty(A + 1),
+            np.empty(A + 1, np.int64), np.empty(V + 1), np.empty(V + 1, np.int64), np.empty(RANK_MAX, np.int64),
+            np.empty((2 * otree.shape[0] + 2, 2), np.int64), cell_start, cell_of, sx, sy, sidx, geo)
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _world_grid(pos, active, neighbor_dist, b, grid_min, cell_start, cell_of, sx, sy, sidx, geo):  # pragma: no cover
+    """Whether world ``b`` finds agent neighbours on a grid of cells (more than ``grid_min`` active agents); if so,
+    builds it (cells sized by the world's largest neighbour distance)."""
+    A = pos.shape[1]
+    if not (grid_min < A and _count_members(active, b, 0) > grid_min):
+        return False
+    reach = 0.0
+    for j in range(A):
+        reach = max(reach, neighbor_dist[b, j])
+    _build_grid(pos, active, b, reach * GRID_MAX_CELL, GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx, geo)
+    return True
+
+
+@nb.njit(cache=True, inline="always", error_model="numpy")
+def _find_obstacles(use_tree, px, py, range_sq, opoint, onext, otree, ostack, ob_idx, ob_d):  # pragma: no cover
+    """Obstacle edges within ``range_sq`` of (``px``, ``py``) into ``ob_idx``/``ob_d`` in RVO2's order: on the tree
+    when ``use_tree`` (more than :data:`OBST_TREE_MIN` vertices), else by the scan. Returns their count."""
+    if use_tree:
+        return _tree_obstacle_neighbors(px, py, range_sq, opoint, onext, otree, ostack, ob_idx, ob_d)
+    return _obstacle_neighbors(px, py, range_sq, opoint, onext, otree, ob_idx, ob_d)
+
+
+
 @nb.njit(cache=True, error_model="numpy")
 def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, time_horizon, time_horizon_obst,
                active, controlled, ignore, opoint, onext, oprev, odir, oconvex, otree, dt, out, grid_min=GRID_MIN):
@@ -727,31 +762,16 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
     pp = np.empty((L, 2))
     pd = np.empty((L, 2))
     res = np.empty(2)
-    cand_idx = np.empty(A + 8, np.int64)  # + 8: the spare slot of _gather, the padding of _select
-    cand_d = np.empty(A + 8)
-    near_idx = np.empty(A + 8, np.int64)
-    near_d = np.empty(A + 8)
-    nb_idx = np.empty(A + 1, np.int64)  # + 1: the discard slot of _select
-    nb_d = np.empty(A + 1)
-    ob_idx = np.empty(V + 1, np.int64)
-    ob_d = np.empty(V + 1)
     inv_dt = 1.0 / dt
-    cell_start, cell_of, sx, sy, sidx, geo = _grid_scratch(A)
-    rank = np.empty(RANK_MAX, np.int64)
-    ostack = np.empty((2 * otree.shape[0] + 2, 2), np.int64)
+    (cand_d, cand_idx, near_d, near_idx, nb_d, nb_idx, ob_d, ob_idx, rank, ostack, cell_start, cell_of, sx, sy, sidx,
+     geo) = _search_scratch(A, V, otree)
     use_tree = V > OBST_TREE_MIN
     for b in range(B):
         for j in range(A):
             if active[b, j] and not (np.isfinite(pos[b, j, 0]) and np.isfinite(pos[b, j, 1])):
                 raise ValueError("orca_batch: pos holds a non-finite position (NaN or inf) of an active agent; "
                                  "valid choices: finite positions [m]")
-        use_grid = False
-        if grid_min < A and _count_members(active, b, 0) > grid_min:
-            use_grid = True
-            reach = 0.0
-            for j in range(A):
-                reach = max(reach, neighbor_dist[b, j])
-            _build_grid(pos, active, b, reach * GRID_MAX_CELL, GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx, geo)
+        use_grid = _world_grid(pos, active, neighbor_dist, b, grid_min, cell_start, cell_of, sx, sy, sidx, geo)
         for i in range(A):
             if not (active[b, i] and controlled[b, i]):
                 out[b, i, 0], out[b, i, 1] = vel[b, i, 0], vel[b, i, 1]
@@ -764,10 +784,7 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
             if V > 0:
                 th_obst = time_horizon_obst[b, i]
                 ob_range_sq = (th_obst * ms + r) ** 2
-                if use_tree:
-                    n_ob = _tree_obstacle_neighbors(px, py, ob_range_sq, opoint, onext, otree, ostack, ob_idx, ob_d)
-                else:
-                    n_ob = _obstacle_neighbors(px, py, ob_range_sq, opoint, onext, otree, ob_idx, ob_d)
+                n_ob = _find_obstacles(use_tree, px, py, ob_range_sq, opoint, onext, otree, ostack, ob_idx, ob_d)
                 n = _obstacle_lines(px, py, vx, vy, r, th_obst, opoint, onext, oprev, odir, oconvex, lp, ld, ob_idx,
                                     n_ob)
             n_obst = n
@@ -776,6 +793,8 @@ def orca_batch(pos, vel, pref, radius, max_speed, neighbor_dist, max_neighbors, 
             range_sq = neighbor_dist[b, i] ** 2
             cnt = 0
             skip = ignore[b, i]
+            # spelled out (as in orca_neighbors): behind one more inlined helper this loop measured 5–10 % slower
+            # (benchmarks/ab_orca.py)
             if k_max > 0 and use_grid:
                 cnt = _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx,
                                     rank, nb_d, nb_idx, near_d, near_idx)
@@ -833,24 +852,11 @@ def orca_neighbors(pos, radius, max_speed, neighbor_dist, max_neighbors, time_ho
     number), nearest first. Inactive agents get counts 0."""
     B, A = pos.shape[0], pos.shape[1]
     V = opoint.shape[0]
-    cand_idx = np.empty(A + 8, np.int64)
-    cand_d = np.empty(A + 8)
-    near_idx = np.empty(A + 8, np.int64)
-    near_d = np.empty(A + 8)
-    nb_idx = np.empty(A + 1, np.int64)
-    nb_d = np.empty(A + 1)
-    ob_idx = np.empty(V + 1, np.int64)
-    ob_d = np.empty(V + 1)
-    cell_start, cell_of, sx, sy, sidx, geo = _grid_scratch(A)
-    rank = np.empty(RANK_MAX, np.int64)
-    ostack = np.empty((2 * otree.shape[0] + 2, 2), np.int64)
+    (cand_d, cand_idx, near_d, near_idx, nb_d, nb_idx, ob_d, ob_idx, rank, ostack, cell_start, cell_of, sx, sy, sidx,
+     geo) = _search_scratch(A, V, otree)
+    use_tree = V > OBST_TREE_MIN
     for b in range(B):
-        use_grid = grid_min < A and _count_members(active, b, 0) > grid_min
-        if use_grid:
-            reach = 0.0
-            for j in range(A):
-                reach = max(reach, neighbor_dist[b, j])
-            _build_grid(pos, active, b, reach * GRID_MAX_CELL, GRID_PER_CELL, cell_start, cell_of, sx, sy, sidx, geo)
+        use_grid = _world_grid(pos, active, neighbor_dist, b, grid_min, cell_start, cell_of, sx, sy, sidx, geo)
         for i in range(A):
             agent_cnt[b, i] = obst_cnt[b, i] = 0
             if not active[b, i]:
@@ -858,17 +864,14 @@ def orca_neighbors(pos, radius, max_speed, neighbor_dist, max_neighbors, time_ho
             px, py = pos[b, i, 0], pos[b, i, 1]
             if V > 0:
                 ob_range_sq = (time_horizon_obst[b, i] * max_speed[b, i] + radius[b, i]) ** 2
-                if V > OBST_TREE_MIN:
-                    n_ob = _tree_obstacle_neighbors(px, py, ob_range_sq, opoint, onext, otree, ostack, ob_idx, ob_d)
-                else:
-                    n_ob = _obstacle_neighbors(px, py, ob_range_sq, opoint, onext, otree, ob_idx, ob_d)
+                n_ob = _find_obstacles(use_tree, px, py, ob_range_sq, opoint, onext, otree, ostack, ob_idx, ob_d)
                 obst_cnt[b, i] = n_ob
                 obst_nb[b, i, :n_ob] = ob_idx[:n_ob]
             k_max = max_neighbors[b, i]
             range_sq = neighbor_dist[b, i] ** 2
-            skip = ignore[b, i]
             cnt = 0
-            if k_max > 0 and use_grid:
+            skip = ignore[b, i]
+            if k_max > 0 and use_grid:  # as orca_batch (spelled out there: see its comment)
                 cnt = _grid_nearest(i, skip, px, py, range_sq, k_max, cell_start, sx, sy, sidx, geo, cand_d, cand_idx,
                                     rank, nb_d, nb_idx, near_d, near_idx)
             elif k_max > 0:
