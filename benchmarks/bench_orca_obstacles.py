@@ -22,10 +22,11 @@ import time
 
 import numpy as np
 
+from crowdbench.bench import ORCA_BENCH
 from crowdbench.humans import preferred_velocity
 from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
 
-DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, RADIUS, MAX_SPEED = 0.25, 10.0, 10, 5.0, 0.31, 1.0
+DT, RADIUS = ORCA_BENCH.dt, ORCA_BENCH.radius
 
 
 def pillar_hall(n: int, spacing: float, seed: int = 0) -> tuple[np.ndarray, list[list[tuple[float, float]]]]:
@@ -54,9 +55,8 @@ def pillar_hall(n: int, spacing: float, seed: int = 0) -> tuple[np.ndarray, list
 def ours(start: np.ndarray, polys, steps: int) -> tuple[float, np.ndarray]:
     """(µs per agent-step, final positions) of ``orca_batch`` + the position update."""
     n = len(start)
-    f = np.ones((1, n))
-    args = (RADIUS * f, MAX_SPEED * f, NEIGHBOR_DIST * f, np.full((1, n), MAX_NEIGHBORS, np.int64), HORIZON * f,
-            HORIZON * f, f > 0, f > 0, np.full((1, n), -1, np.int64))
+    f = np.full((1, n), ORCA_BENCH.max_speed)
+    args = ORCA_BENCH.batch_args(1, n)
     obst = build_obstacles(polys)
     pos, vel, out, goal = start[None].copy(), np.zeros((1, n, 2)), np.empty((1, n, 2)), -start[None]
     elapsed = 0.0
@@ -75,7 +75,7 @@ def rvo2_run(start: np.ndarray, polys, steps: int) -> tuple[float, np.ndarray]:
     import rvo2
 
     n = len(start)
-    sim = rvo2.PyRVOSimulator(DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, HORIZON, RADIUS, MAX_SPEED)
+    sim = rvo2.PyRVOSimulator(*ORCA_BENCH.simulator_args())
     for p in start:
         sim.addAgent((float(p[0]), float(p[1])))
     for poly in polys:
@@ -84,7 +84,7 @@ def rvo2_run(start: np.ndarray, polys, steps: int) -> tuple[float, np.ndarray]:
     elapsed = 0.0
     for _ in range(steps):
         here = np.array([sim.getAgentPosition(i) for i in range(n)])
-        pref = preferred_velocity(here, -start, np.ones(n), DT)
+        pref = preferred_velocity(here, -start, np.full(n, ORCA_BENCH.max_speed), DT)
         for i in range(n):
             sim.setAgentPrefVelocity(i, (float(pref[i, 0]), float(pref[i, 1])))
         t = time.process_time()

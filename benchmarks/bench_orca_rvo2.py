@@ -34,12 +34,12 @@ import time
 
 import numpy as np
 
-from crowdbench.bench import bench_crowd
+from crowdbench.bench import ORCA_BENCH, bench_crowd
 from crowdbench.humans import preferred_velocity
 from crowdbench.humans.orca_kernel import build_obstacles, orca_advance, orca_batch
 from crowdbench.io import atomic_path
 
-DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, RADIUS, MAX_SPEED = 0.25, 10.0, 10, 5.0, 0.31, 1.0
+DT = ORCA_BENCH.dt
 
 
 def plan(n: int, worlds: int, target: int) -> tuple[int, int]:
@@ -51,9 +51,8 @@ def plan(n: int, worlds: int, target: int) -> tuple[int, int]:
 def crowdbench_run(start: np.ndarray, episodes: int, steps: int, kernel=orca_batch) -> float:
     """Agent-steps per CPU second of ``kernel`` (``orca_batch``'s signature) on ``start`` ``(B, N, 2)``."""
     B, N = start.shape[:2]
-    f = np.ones((B, N))
-    args = (RADIUS * f, MAX_SPEED * f, NEIGHBOR_DIST * f, np.full((B, N), MAX_NEIGHBORS, np.int64), HORIZON * f,
-            HORIZON * f, np.ones((B, N), bool), np.ones((B, N), bool), np.full((B, N), -1, np.int64))
+    f = np.full((B, N), ORCA_BENCH.max_speed)
+    args = ORCA_BENCH.batch_args(B, N)
     obst, goal = build_obstacles([]), -start
     elapsed = 0.0
     for _ in range(episodes):
@@ -73,10 +72,9 @@ def crowdbench_advance_run(start: np.ndarray, episodes: int, steps: int) -> floa
     """Agent-steps per CPU second of ``orca_advance`` (RVO2's ``doStep``: velocities and positions in one call, agent
     arrays in blocks) on ``start`` ``(B, N, 2)``."""
     B, N = start.shape[:2]
-    f = np.ones((B, N))
-    flt = np.stack([RADIUS * f, MAX_SPEED * f, NEIGHBOR_DIST * f, HORIZON * f, HORIZON * f])
-    ints = np.stack([np.full((B, N), MAX_NEIGHBORS, np.int64), np.full((B, N), -1, np.int64)])
-    flags = np.ones((2, B, N), bool)
+    f = np.full((B, N), ORCA_BENCH.max_speed)
+    a = ORCA_BENCH.batch_args(B, N)  # radius, max_speed, neighbor_dist, max_neighbors, horizons, active, ..., ignore
+    flt, ints, flags = np.stack([a[0], a[1], a[2], a[4], a[5]]), np.stack([a[3], a[8]]), np.stack([a[6], a[7]])
     obst, goal = build_obstacles([]), -start
     elapsed = 0.0
     for _ in range(episodes):
@@ -97,12 +95,12 @@ def rvo2_run(start: np.ndarray, episodes: int, steps: int, simulator: type | Non
 
     simulator = simulator or rvo2.PyRVOSimulator
     B, N = start.shape[:2]
-    goal, f = -start, np.ones(N)
+    goal, f = -start, np.full(N, ORCA_BENCH.max_speed)
     elapsed = 0.0
     for _ in range(episodes):
         sims = []
         for w in range(B):
-            sim = simulator(DT, NEIGHBOR_DIST, MAX_NEIGHBORS, HORIZON, HORIZON, RADIUS, MAX_SPEED)
+            sim = simulator(*ORCA_BENCH.simulator_args())
             for i in range(N):
                 sim.addAgent((float(start[w, i, 0]), float(start[w, i, 1])))
             sim.processObstacles()

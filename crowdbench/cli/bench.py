@@ -31,6 +31,7 @@ import platform
 import statistics
 import time
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -208,29 +209,64 @@ def bench_crowd(n: int, worlds: int, crowd: str = "circle") -> np.ndarray:
     raise ValueError(f"crowd={crowd!r}; valid choices: circle, grid")
 
 
+@dataclass(frozen=True)
+class ORCABenchParams:
+    """The ORCA scaling benchmarks' agent parameters (this module's, ``benchmarks/bench_orca_rvo2.py``'s and
+    ``benchmarks/bench_orca_obstacles.py``'s; every agent alike)."""
+
+    dt: float = 0.25
+    """Time step [s]."""
+    neighbor_dist: float = 10.0
+    """Neighbour distance [m]."""
+    max_neighbors: int = 10
+    """Neighbours per agent [-]."""
+    horizon: float = 5.0
+    """Time horizon, for agents and for obstacles [s]."""
+    radius: float = 0.31
+    """Radius [m]."""
+    max_speed: float = 1.0
+    """Largest speed, also the preferred speed [m/s]."""
+
+    def batch_args(self, worlds: int, n: int) -> tuple[np.ndarray, ...]:
+        """``orca_batch``'s per-agent arguments from ``radius`` to ``ignore`` for ``worlds`` × ``n`` agents, every
+        agent active and controlled, none ignored."""
+        f = np.ones((worlds, n))
+        return (self.radius * f, self.max_speed * f, self.neighbor_dist * f, np.full((worlds, n), self.max_neighbors,
+                np.int64), self.horizon * f, self.horizon * f, f > 0, f > 0, np.full((worlds, n), -1, np.int64))
+
+    def simulator_args(self) -> tuple[float, float, int, float, float, float, float]:
+        """``PyRVOSimulator(timeStep, neighborDist, maxNeighbors, timeHorizon, timeHorizonObst, radius, maxSpeed)``'s
+        arguments (RVO2's and crowdbench's drop-in alike)."""
+        return (self.dt, self.neighbor_dist, self.max_neighbors, self.horizon, self.horizon, self.radius,
+                self.max_speed)
+
+
+ORCA_BENCH = ORCABenchParams()
+
+
 def orca_agent_steps_per_s(n: int, worlds: int, steps: int, repeats: int, crowd: str = "circle"
                            ) -> dict[str, float]:
-    """ORCA agent-steps per second of the compiled kernel alone on :func:`bench_crowd` ``crowd`` (neighbour distance
-    10 m, 10 neighbours, radius 0.31 m, speed 1 m/s, dt 0.25 s)."""
+    """ORCA agent-steps per second of the compiled kernel alone on :func:`bench_crowd` ``crowd`` (parameters
+    :data:`ORCA_BENCH`: neighbour distance 10 m, 10 neighbours, radius 0.31 m, speed 1 m/s, dt 0.25 s)."""
     from crowdbench.humans import preferred_velocity
     from crowdbench.humans.orca_kernel import build_obstacles, orca_batch
 
+    P = ORCA_BENCH
     pos = bench_crowd(n, worlds, crowd)
-    goal, vel, f = -pos, np.zeros_like(pos), np.ones((worlds, n))
-    args = (0.31 * f, f, 10.0 * f, np.full((worlds, n), 10, np.int64), 5.0 * f, 5.0 * f, np.ones((worlds, n), bool),
-            np.ones((worlds, n), bool), np.full((worlds, n), -1, np.int64))
+    goal, vel, f = -pos, np.zeros_like(pos), np.full((worlds, n), P.max_speed)
+    args = P.batch_args(worlds, n)
     obst, out = build_obstacles([]), np.empty_like(pos)
-    orca_batch(pos, vel, preferred_velocity(pos, goal, f, 0.25), *args, *obst, 0.25, out)
+    orca_batch(pos, vel, preferred_velocity(pos, goal, f, P.dt), *args, *obst, P.dt, out)
     samples = []
     for _ in range(repeats):
         elapsed = 0.0
         for _ in range(steps):
-            pref = preferred_velocity(pos, goal, f, 0.25)
+            pref = preferred_velocity(pos, goal, f, P.dt)
             t = time.perf_counter()
-            orca_batch(pos, vel, pref, *args, *obst, 0.25, out)
+            orca_batch(pos, vel, pref, *args, *obst, P.dt, out)
             elapsed += time.perf_counter() - t
             vel = out.copy()
-            pos = pos + vel * 0.25
+            pos = pos + vel * P.dt
         samples.append(steps * worlds * n / elapsed)
     return _stats(samples)
 
