@@ -4,7 +4,9 @@
 crossings (10 pedestrians, latent-responsive ORCA at ρ = 0.5, the robot driven by the policy itself: recurrent states
 carried), and the pedestrian positions of the shipped ``learned_crowd`` after 6 steps; the GST predictor runs inside
 AIG-GST's ``predicted`` observation. Regenerate (only after a deliberate change of a network's numbers) with
-``python tests/policies/test_shipped_checkpoints.py``.
+``python tests/policies/test_shipped_checkpoints.py``; after shipping or replacing one checkpoint, record only its
+entry with ``python tests/policies/test_shipped_checkpoints.py METHOD/NAME`` (e.g. ``sarl/sarl-seed1``): every other
+entry stays as recorded.
 """
 
 from __future__ import annotations
@@ -81,6 +83,27 @@ def test_every_shipped_checkpoint_has_recorded_actions():
     assert recorded == {f"{m}/{n}" for m, n in shipped()}
 
 
+def write(entries: dict[str, np.ndarray]) -> None:
+    """Write the fixture atomically (a temporary file beside it, then a rename)."""
+    tmp = FIXTURE.with_name(FIXTURE.stem + ".tmp.npz")
+    np.savez_compressed(tmp, **entries)
+    tmp.replace(FIXTURE)
+
+
+def rerecord(keys: list[str]) -> dict[str, np.ndarray]:
+    """The fixture with the entries ``keys`` (``METHOD/NAME`` of shipped checkpoints) recorded anew."""
+    valid = {f"{m}/{n}" for m, n in shipped()}
+    entries = dict(np.load(FIXTURE))
+    for key in keys:
+        if key not in valid:
+            raise SystemExit(f"entry={key!r}: not a shipped checkpoint; valid choices: {', '.join(sorted(valid))}")
+        method, name = key.split("/")
+        entries[key] = robot_actions(method, name)
+    return entries
+
+
 if __name__ == "__main__":
-    np.savez_compressed(FIXTURE, **record())
+    import sys
+
+    write(rerecord(sys.argv[1:]) if len(sys.argv) > 1 else record())
     print(f"wrote {FIXTURE}")
