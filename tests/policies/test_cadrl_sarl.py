@@ -282,3 +282,27 @@ def test_cli_trains_a_value_method(tmp_path):
     assert main(["train", "cadrl", "--il-episodes", "4", "--rl-episodes", "4", "--worlds", "4",
                  "--out", str(out)]) == 0
     assert (out / "policy.pt").exists() and (out / "curve.png").exists()
+
+
+def test_imitation_checkpoints_every_tenth_epoch_and_resumes_exactly(tmp_path, monkeypatch):
+    from crowdbench.training import value
+
+    saves: list[tuple[str, int]] = []
+    real_save = ValueTrainer.save
+
+    def counting_save(self, *args, **kwargs):
+        saves.append((self.phase, self.epoch))
+        return real_save(self, *args, **kwargs)
+
+    monkeypatch.setattr(ValueTrainer, "save", counting_save)
+    monkeypatch.setattr(value, "IL_CHECKPOINT_EVERY", 2)
+    cfg = tiny_value(method="cadrl", il_epochs=5, rl_episodes=4)
+    straight = train_value(cfg, str(tmp_path / "a"), quiet=True)
+    assert [e for p, e in saves if p == "il_fit"] == [0, 2, 4]  # after collecting, then every second epoch
+    split = ValueTrainer(cfg, str(tmp_path / "b"), quiet=True)
+    split.train(rounds=5)  # 2 demonstration rounds, 3 epochs: a budget stop checkpoints between the tenths
+    assert split.phase == "il_fit" and split.epoch == 3
+    resumed = train_value(cfg, str(tmp_path / "b"), resume=str(tmp_path / "b"), quiet=True)
+    assert resumed.phase == "done"
+    for k, v in straight.net.state_dict().items():
+        assert torch.equal(v, resumed.net.state_dict()[k]), k
