@@ -300,7 +300,7 @@ def test_imitation_checkpoints_every_tenth_epoch_and_resumes_exactly(tmp_path, m
     straight = train_value(cfg, str(tmp_path / "a"), quiet=True)
     assert [e for p, e in saves if p == "il_fit"] == [0, 2, 4]  # after collecting, then every second epoch
     split = ValueTrainer(cfg, str(tmp_path / "b"), quiet=True)
-    split.train(rounds=5)  # 2 demonstration rounds, 3 epochs: a budget stop checkpoints between the tenths
+    split.train(rounds=5)  # 2 demonstration rounds, 3 epochs: the stop checkpoints between those
     assert split.phase == "il_fit" and split.epoch == 3
     resumed = train_value(cfg, str(tmp_path / "b"), resume=str(tmp_path / "b"), quiet=True)
     assert resumed.phase == "done"

@@ -28,6 +28,11 @@ def shipped() -> list[tuple[str, str]]:
     return [(m, n) for m in METHODS.names() for n in checkpoints.shipped_names(m)]
 
 
+def shipped_keys() -> set[str]:
+    """The fixture's entry ``METHOD/NAME`` of every shipped robot-policy checkpoint."""
+    return {f"{m}/{n}" for m, n in shipped()}
+
+
 def robot_actions(method: str, name: str) -> np.ndarray:
     """Actions ``(STEPS, WORLDS, 2)`` of shipped checkpoint ``name`` of ``method`` driving the robot."""
     from crowdbench.config import WorldConfig
@@ -80,19 +85,20 @@ def test_learned_crowd_gives_the_recorded_positions():
 
 def test_every_shipped_checkpoint_has_recorded_actions():
     recorded = {k for k in np.load(FIXTURE).files if not k.startswith("humans/")}
-    assert recorded == {f"{m}/{n}" for m, n in shipped()}
+    assert recorded == shipped_keys()
 
 
 def write(entries: dict[str, np.ndarray]) -> None:
-    """Write the fixture atomically (a temporary file beside it, then a rename)."""
-    tmp = FIXTURE.with_name(FIXTURE.stem + ".tmp.npz")
-    np.savez_compressed(tmp, **entries)
-    tmp.replace(FIXTURE)
+    """Write the fixture atomically (:func:`crowdbench.io.atomic_path`)."""
+    from crowdbench.io import atomic_path
+
+    with atomic_path(FIXTURE) as tmp:
+        np.savez_compressed(tmp, **entries)
 
 
 def rerecord(keys: list[str]) -> dict[str, np.ndarray]:
     """The fixture with the entries ``keys`` (``METHOD/NAME`` of shipped checkpoints) recorded anew."""
-    valid = {f"{m}/{n}" for m, n in shipped()}
+    valid = shipped_keys()
     entries = dict(np.load(FIXTURE))
     for key in keys:
         if key not in valid:
