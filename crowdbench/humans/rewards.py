@@ -8,7 +8,7 @@ use the entry-point group ``crowdbench.human_rewards``). It sees the world befor
 Shipped: ``progress`` (below) and ``none`` (zero).
 """
 
-# numba-cache-key: crowdbench.worlds._kernels 48daeaca49dc
+# numba-cache-key: crowdbench.worlds._kernels 34b006d3166a
 
 from __future__ import annotations
 

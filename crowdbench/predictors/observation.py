@@ -56,14 +56,14 @@ class PredictedObservation(Observation):
 
     def build(self, world) -> dict[str, np.ndarray]:
         n, H, B = self.config.max_humans_observed, world.num_humans, world.num_worlds
-        obs = _build(world, 2, self.config.sensing_range, n, by_id=True)
-        seen = obs["mask"][:, :H] > 0.5
+        obs = _build(world, 2, self.config.sensing_range, H, by_id=True)  # every slot: more people than n in view
+        seen = obs["mask"] > 0.5
         if self.track is None or self.track.pos.shape[0] != B or self.track.pos.shape[2] != H:
             self.track = Track(B, H)
         self.track.update(world.pos[:, 1:], seen, world.steps)
         pred = self.predictor.predict(self.track, world) - world.pos[:, 0][:, None, None, :]  # (B, H, K, 2)
-        feats = np.concatenate([obs["humans"][:, :H], pred.reshape(B, H, -1)], axis=-1)
-        dist = np.where(seen, np.hypot(obs["humans"][:, :H, 0], obs["humans"][:, :H, 1]), np.inf)
+        feats = np.concatenate([obs["humans"], pred.reshape(B, H, -1)], axis=-1)
+        dist = np.where(seen, np.hypot(obs["humans"][..., 0], obs["humans"][..., 1]), np.inf)
         order = np.argsort(dist, axis=1, kind="stable")[:, :n]
         humans = np.zeros((B, n, feats.shape[-1]), np.float32)
         mask = np.zeros((B, n), np.float32)

@@ -14,7 +14,8 @@ Builders:
 * ``relative`` (positions): ``robot`` ``(9,)`` = [px, py, r, gx, gy, v_pref, θ, vx, vy]; ``humans``
   ``(N_max, 2)`` = (Δx, Δy) of the sensed pedestrians, nearest first, zero-padded; ``mask`` ``(N_max,)`` = 1 for
   real entries.
-* ``relative_by_id`` (positions): ``relative`` with slot j = pedestrian j (recurrent per-pedestrian states, DS-RNN).
+* ``relative_by_id`` (positions): ``relative`` with slot j = pedestrian j (recurrent per-pedestrian states, DS-RNN);
+  in a crowd larger than ``N_max``, slots lent to people while they stay in view (:class:`RelativeByIdObservation`).
 * ``predicted`` (positions; AIG-GST's, :mod:`crowdbench.predictors.observation`): ``relative`` plus each
   pedestrian's predicted positions; stateful (it keeps the robot's track of what it has seen).
 * ``estimated_state`` (positions): the state layout below with velocities *estimated* from the positions
@@ -36,7 +37,7 @@ from gymnasium import spaces
 
 from crowdbench.config import WorldConfig
 from crowdbench.registry import Registry
-from crowdbench.worlds._kernels import human_observation, one_world_observations, robot_observation
+from crowdbench.worlds._kernels import assign_slots, human_observation, one_world_observations, robot_observation
 
 BOUND = 1.0e5
 """Finite bound of the Box spaces [m or m/s] (parked padding slots sit at 1e4 m)."""
@@ -146,14 +147,44 @@ class RelativeObservation(Observation):
 
 @OBSERVATIONS.register("relative_by_id")
 class RelativeByIdObservation(RelativeObservation):
-    """The paper's observation with pedestrians in slot order instead of nearest first: ``humans[j]`` is pedestrian
-    ``j``'s (Δx, Δy), zero with ``mask[j] = 0`` while it is outside ``sensing_range`` or absent. For recurrent
-    policies that keep a state per pedestrian (DS-RNN's spatial-edge GRUs follow one person each)."""
+    """The paper's observation with each slot following one person instead of nearest first. For recurrent
+    policies that keep a state per pedestrian (DS-RNN's spatial-edge GRUs follow one person each).
+
+    * Up to ``N_max`` pedestrians in the world: ``humans[j]`` is pedestrian ``j``'s (Δx, Δy), zero with
+      ``mask[j] = 0`` while it is outside ``sensing_range`` or absent (one compiled kernel, stateless).
+    * More pedestrians than slots (a large crowd): slots are lent to people as they come into view and kept while
+      they stay in it (:func:`~crowdbench.worlds._kernels.assign_slots`): a slot frees when its person leaves the
+      sensing range or is re-spawned, and everyone in view without a slot takes a free one, nearest first; with
+      more people in view than slots, those farthest wait for a slot to free. A slot's recurrent state then passes
+      to its next person, as a re-spawned pedestrian's does. Stateful in this case, so one builder serves one batch
+      of worlds; a world whose step counter restarts (a new episode) starts with every slot free.
+    """
 
     name = "relative_by_id"
 
+    def __init__(self, config: WorldConfig) -> None:
+        super().__init__(config)
+        self._slots: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None = None
+
     def kernel_spec(self) -> tuple[int, float, int, bool]:
         return 2, self.config.sensing_range, self.config.max_humans_observed, True
+
+    def build(self, world) -> dict[str, np.ndarray]:
+        B, H, n = world.num_worlds, world.num_humans, self.config.max_humans_observed
+        if n >= H:
+            return _build(world, *self.kernel_spec())
+        obs = _build(world, 2, self.config.sensing_range, H, by_id=True)
+        seen = obs["mask"] > 0.5
+        if self._slots is None or self._slots[1].shape != (B, H):
+            self._slots = (np.full((B, n), -1, np.int64), np.full((B, H), -1, np.int64),
+                           np.zeros((B, H), np.int64), np.full(B, -2, np.int64))
+        who, slot_of, last_spawns, last_step = self._slots
+        dist = np.hypot(obs["humans"][..., 0], obs["humans"][..., 1]).astype(np.float64)
+        assign_slots(seen, dist, world.spawns[:, 1:], world.steps, who, slot_of, last_spawns, last_step)
+        held = who >= 0
+        idx = np.where(held, who, 0)
+        humans = np.where(held[..., None], np.take_along_axis(obs["humans"], idx[..., None], 1), 0.0)
+        return {"robot": obs["robot"], "humans": humans.astype(np.float32), "mask": held.astype(np.float32)}
 
 
 @OBSERVATIONS.register("full_state")
@@ -268,7 +299,9 @@ def agent_observations(builder: Observation, world) -> tuple[dict[str, np.ndarra
     (:func:`human_observations`) of a one-world ``world``: one compiled call for the compiled builders
     (``relative``, ``relative_by_id``, ``full_state``: their ``kernel_spec``), the builder then the pedestrians'
     kernel for any other."""
-    if type(builder).build not in _COMPILED_BUILDS or world.num_worlds != 1:  # (a subclass may override build)
+    compiled = type(builder).build in _COMPILED_BUILDS and world.num_worlds == 1  # (a subclass may override build)
+    if not compiled or (type(builder).build is RelativeByIdObservation.build
+                        and world.num_humans > builder.config.max_humans_observed):  # lent slots: stateful
         return builder.build(world), human_observations(world, 0)
     features, max_range, n_max, by_id = builder.kernel_spec()
     cfg = world.config
@@ -280,7 +313,8 @@ def agent_observations(builder: Observation, world) -> tuple[dict[str, np.ndarra
     return {"robot": robot, "humans": humans, "mask": mask}, {"self": me, "neighbors": nb, "mask": hmask}
 
 
-_COMPILED_BUILDS = (RelativeObservation.build, FullStateObservation.build)  # ObservedState inherits the latter
+_COMPILED_BUILDS = (RelativeObservation.build, RelativeByIdObservation.build, FullStateObservation.build)
+"""Builders :func:`agent_observations` fuses with the pedestrians' kernel (``ObservedState`` inherits the last)."""
 
 OBSERVATIONS.register("predicted", "crowdbench.predictors.observation:PredictedObservation")
 

@@ -19,6 +19,8 @@ it bit for bit (``tests/worlds/test_kernels.py``):
 * :func:`first_clear` — the first re-spawn candidate clear of everyone (reference: ``reference.first_clear``).
 * :func:`spawn_clear`, :func:`change_goals` — CrowdNav++'s spawn and goal-change clearance (reference:
   ``reference.spawn_clear``).
+* :func:`assign_slots` — persistent slots of a by-identity observation when a world has more pedestrians than
+  slots (reference: ``reference.assign_slots``).
 
 Large crowds: the kernels whose brute force is quadratic in a world's agents — the pedestrians' observations (each
 agent's nearest neighbours), :func:`crowd_clearance`, the overlap count of :func:`outcome` — search a cell grid
@@ -675,3 +677,47 @@ def change_goals(cands, slots, pos, goal, radius, active, gap):  # pragma: no co
             goal[a, 0], goal[a, 1] = cands[i, k, 0], cands[i, k, 1]
             changed += 1
     return changed
+
+
+@nb.njit(cache=True, error_model="numpy")
+def assign_slots(seen, dist, spawns, steps, who, slot_of, last_spawns, last_step):  # pragma: no cover - numba
+    """Persistent observation slots, in place, for worlds with more pedestrians ``H`` than slots ``n``.
+
+    Inputs ``seen`` ``(B, H)`` bool (in sensing range), ``dist`` ``(B, H)`` [m] (any order-preserving distance; only
+    seen entries are read), ``spawns`` ``(B, H)`` (re-spawn counts) and the episode step ``steps`` ``(B,)``. State
+    kept between calls: ``who`` ``(B, n)`` (the pedestrian in each slot, −1 free), ``slot_of`` ``(B, H)`` (its
+    inverse, −1 none), ``last_spawns`` ``(B, H)`` and ``last_step`` ``(B,)``. Per world: every slot frees when the step
+    counter neither repeats nor follows on (a new episode); a slot frees when its pedestrian is out of view or was
+    re-spawned; then the seen pedestrians without a slot take the free slots nearest first (ties by index), lowest
+    slot first, until none is free. Calling it twice on the same state changes nothing."""
+    B, H = seen.shape
+    n = who.shape[1]
+    for b in range(B):
+        if steps[b] != last_step[b] and steps[b] != last_step[b] + 1:
+            for s in range(n):
+                who[b, s] = -1
+            for h in range(H):
+                slot_of[b, h] = -1
+        for s in range(n):
+            h = who[b, s]
+            if h >= 0 and (not seen[b, h] or spawns[b, h] != last_spawns[b, h]):
+                who[b, s] = -1
+                slot_of[b, h] = -1
+        key = np.where(seen[b], dist[b], INF)
+        order = np.argsort(key, kind="mergesort")
+        free = 0
+        for i in range(H):
+            h = order[i]
+            if not seen[b, h]:
+                break
+            if slot_of[b, h] >= 0:
+                continue
+            while free < n and who[b, free] >= 0:
+                free += 1
+            if free == n:
+                break
+            who[b, free] = h
+            slot_of[b, h] = free
+        for h in range(H):
+            last_spawns[b, h] = spawns[b, h]
+        last_step[b] = steps[b]

@@ -6,7 +6,7 @@ fit the requested crowd raises ``ValueError`` instead of looping forever.
 """
 
 # numba-cache-key: crowdbench.geometry 31fac0ddc665
-# numba-cache-key: crowdbench.worlds._kernels 48daeaca49dc
+# numba-cache-key: crowdbench.worlds._kernels 34b006d3166a
 
 from __future__ import annotations
 

@@ -166,3 +166,22 @@ def spawn_clear(cands, pos, goal, radius, active, skip, r_new, gap, with_goals) 
         ok &= (np.linalg.norm(cands[:, None] - goal[others][None], axis=-1) >= need).all(axis=1)
     hits = np.flatnonzero(ok)
     return int(hits[0]) if len(hits) else -1
+
+
+def assign_slots(seen, dist, spawns, steps, who, slot_of, last_spawns, last_step) -> None:
+    """Persistent observation slots (the compiled ``assign_slots``'s statement, same arguments and state)."""
+    n = who.shape[1]
+    for b in range(seen.shape[0]):
+        if steps[b] not in (last_step[b], last_step[b] + 1):  # a new episode
+            who[b] = -1
+            slot_of[b] = -1
+        for s in range(n):  # out of view or re-spawned: the slot frees
+            h = who[b, s]
+            if h >= 0 and (not seen[b, h] or spawns[b, h] != last_spawns[b, h]):
+                who[b, s] = slot_of[b, h] = -1
+        newcomers = [h for h in sorted(np.flatnonzero(seen[b]), key=lambda h: (dist[b, h], h)) if slot_of[b, h] < 0]
+        free = [s for s in range(n) if who[b, s] < 0]
+        for h, s in zip(newcomers, free, strict=False):
+            who[b, s], slot_of[b, h] = h, s
+        last_spawns[b] = spawns[b]
+        last_step[b] = steps[b]

@@ -150,6 +150,46 @@ def test_relative_by_id_observation_keeps_each_pedestrian_in_its_slot():
     assert len(seen) >= 3  # several people came into view
 
 
+@pytest.mark.parametrize("batched", [False, True])
+def test_relative_by_id_in_a_crowd_larger_than_its_slots_lends_slots_that_follow_people(batched):
+    """40 pedestrians, 8 slots: everyone in view is someone's slot while slots last (the nearest first), a person
+    keeps their slot while in view, and people with an index beyond the slot count are seen too."""
+    if batched:
+        cfg = crowdbench.config.make_config(num_humans=40, max_humans_observed=8)
+        world = crowdbench.worlds.CrowdWorld(cfg, 2, "circle_crossing", "orca")
+        world.reset(seeds=[4, 5])
+        builder = crowdbench.robots.make_observation("relative_by_id", cfg)
+    else:
+        env = crowdbench.parallel_env(num_humans=40, max_humans_observed=8, observation="relative_by_id")
+        last, _ = env.reset(seed=4)
+        world = env.world
+    holder = {}
+    high_ids = set()
+    for t in range(30):
+        o = builder.build(world) if batched else {k: v[None] for k, v in last["robot"].items()}
+        for b in range(world.num_worlds):
+            rel = world.pos[b, 1:] - world.pos[b, 0]
+            surface = np.linalg.norm(rel, axis=1) - world.radius[b, 1:] - world.radius[b, 0]
+            inside = np.flatnonzero(surface <= 5.0)
+            held = o["mask"][b] > 0.5
+            assert held.sum() == min(8, len(inside))
+            who = [int(np.flatnonzero(np.all(np.abs(rel - o["humans"][b, s]) < 1e-5, axis=1))[0])
+                   for s in np.flatnonzero(held)]
+            assert set(who) <= set(inside.tolist())
+            if len(inside) > 8:  # the nearest take the slots first, unless an earlier holder is still in view
+                assert min(surface[inside]) in surface[who]
+            for s, h in zip(np.flatnonzero(held), who, strict=True):
+                if (b, h) in holder and h in inside and holder[(b, h)][1] == t - 1:
+                    assert holder[(b, h)][0] == s  # kept its slot
+                holder[(b, h)] = (s, t)
+            high_ids |= {h for h in who if h >= 8}
+        if batched:
+            world.step(np.zeros((2, 2)))
+        else:
+            last, *_ = env.step({"robot": np.array([0.0, 0.0])})
+    assert high_ids  # people beyond the first 8 indices are seen
+
+
 def test_unknown_option_and_render_mode_errors():
     with pytest.raises(TypeError, match="unknown world option"):
         crowdbench.parallel_env(num_humen=3)

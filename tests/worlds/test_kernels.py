@@ -141,6 +141,30 @@ def test_robot_observation_kernel_equals_reference(features, max_range, slots, b
         np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_assign_slots_kernel_equals_reference(seed):
+    """Over a sequence of steps (views changing, re-spawns, a new episode, a repeated call), the compiled slot
+    lending and its plain statement keep the same state."""
+    rng = np.random.default_rng(seed)
+    B, H, n = 3, int(rng.integers(4, 20)), int(rng.integers(1, 6))
+    states = [(np.full((B, n), -1, np.int64), np.full((B, H), -1, np.int64), np.zeros((B, H), np.int64),
+               np.full(B, -2, np.int64)) for _ in range(2)]
+    spawns, steps = np.zeros((B, H), np.int64), np.zeros(B, np.int64)
+    for t in range(30):
+        seen = rng.random((B, H)) < 0.6
+        dist = rng.choice([0.5, 1.0, 2.0, 3.0], (B, H))  # ties: broken by index
+        spawns += rng.random((B, H)) < 0.05
+        steps = np.where(rng.random(B) < 0.1, 0, steps + (t % 7 != 3))  # restarts and repeated steps
+        for fn, state in zip((_kernels.assign_slots, reference.assign_slots), states, strict=True):
+            fn(seen, dist, spawns, steps, *state)
+        for a, b in zip(*states, strict=True):
+            np.testing.assert_array_equal(a, b)
+        who, slot_of = states[0][:2]
+        held = who >= 0
+        assert seen[np.arange(B)[:, None], np.where(held, who, 0)][held].all()  # slots hold people in view
+        assert (held.sum(1) == np.minimum(n, seen.sum(1))).all()  # no slot idle while someone in view waits
+
+
 @pytest.mark.parametrize("visible", [True, False])
 @pytest.mark.parametrize("slots", [2, 30])
 @pytest.mark.parametrize("seed", range(4))
@@ -262,18 +286,20 @@ def test_world_through_kernels_equals_world_through_reference(layout, config, mo
 
 
 @pytest.mark.parametrize("name", ["relative", "relative_by_id", "full_state", "predicted"])
-def test_one_world_observations_in_one_call_equal_builder_and_pedestrian_kernels(name):
+@pytest.mark.parametrize("slots", [30, 5])
+def test_one_world_observations_in_one_call_equal_builder_and_pedestrian_kernels(name, slots):
     from crowdbench.robots.observations import agent_observations
 
-    w = CrowdWorld(WorldConfig(num_humans=9, humans_range=(4, 9)), 1, "circle_crossing", "responsive_orca")
-    builder = make_observation(name, w.config)
+    w = CrowdWorld(WorldConfig(num_humans=9, humans_range=(4, 9), max_humans_observed=slots), 1, "circle_crossing",
+                   "responsive_orca")
+    builder, twin = make_observation(name, w.config), make_observation(name, w.config)  # (stateful builders)
     rng = np.random.default_rng(1)
     for t in range(60):
         if t % 20 == 0:
             w.reset(seeds=[t])
         w.step(rng.uniform(-1.2, 1.2, (1, 2)))
         robot, humans = agent_observations(builder, w)
-        for got, want in ((robot, builder.build(w)), (humans, human_observations(w, 0))):
+        for got, want in ((robot, twin.build(w)), (humans, human_observations(w, 0))):
             assert got.keys() == want.keys()
             for k in got:
                 np.testing.assert_array_equal(got[k], want[k])
