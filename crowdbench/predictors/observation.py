@@ -17,7 +17,7 @@ from gymnasium import spaces
 
 from crowdbench.config import WorldConfig
 from crowdbench.predictors.base import Predictor, Track, make_predictor
-from crowdbench.robots.observations import BOUND, Observation, _build, _robot_box
+from crowdbench.robots.observations import BOUND, Observation, _build, _robot_box, nearest_first
 
 INTRUSION_PENALTY = -20.0
 """Scale of the intrusion penalty: step k costs ``INTRUSION_PENALTY / 2^{k+1}`` [-]."""
@@ -63,13 +63,7 @@ class PredictedObservation(Observation):
         self.track.update(world.pos[:, 1:], seen, world.steps)
         pred = self.predictor.predict(self.track, world) - world.pos[:, 0][:, None, None, :]  # (B, H, K, 2)
         feats = np.concatenate([obs["humans"], pred.reshape(B, H, -1)], axis=-1)
-        dist = np.where(seen, np.hypot(obs["humans"][..., 0], obs["humans"][..., 1]), np.inf)
-        order = np.argsort(dist, axis=1, kind="stable")[:, :n]
-        humans = np.zeros((B, n, feats.shape[-1]), np.float32)
-        mask = np.zeros((B, n), np.float32)
-        k = order.shape[1]
-        mask[:, :k] = np.take_along_axis(seen, order, 1)
-        humans[:, :k] = np.where(mask[:, :k, None] > 0.5, np.take_along_axis(feats, order[..., None], 1), 0.0)
+        humans, mask = nearest_first(obs["humans"], seen, feats, n)
         return {"robot": obs["robot"], "humans": humans, "mask": mask}
 
     def reward(self, obs: dict[str, np.ndarray]) -> np.ndarray:

@@ -96,6 +96,12 @@ class Observation(ABC):
         reward on the steps that did not end the episode; AIG-GST's prediction-intrusion penalty). ``None``: none."""
         return None
 
+    def fused_spec(self, world) -> tuple[int, float, int, bool] | None:
+        """``(features, max_range, slots, by_id)`` where the one compiled kernel of :func:`agent_observations` builds
+        this observation of a one-world ``world`` together with the pedestrians'; ``None`` (the default): it does
+        not, and :meth:`build` runs."""
+        return None
+
 
 OBSERVATIONS: Registry[Observation] = Registry("robot observation", "crowdbench.observations")
 
@@ -121,6 +127,29 @@ def _build(world, features: int, max_range: float, n_max: int, by_id: bool = Fal
     return {"robot": robot, "humans": humans, "mask": mask}
 
 
+def nearest_first(rel: np.ndarray, seen: np.ndarray, feats: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Every pedestrian's features cut to the ``n`` nearest in view, nearest first (ties by index).
+
+    Args:
+        rel: Positions relative to the robot ``(B, H, 2)`` [m].
+        seen: In view ``(B, H)`` bool.
+        feats: Per-pedestrian features ``(B, H, F)``.
+        n: Slots (``N_max``); with fewer people in view, the rest are zero with mask 0.
+
+    Returns:
+        ``humans`` ``(B, n, F)`` float32 and ``mask`` ``(B, n)`` float32.
+    """
+    B, H, F = feats.shape
+    dist = np.where(seen, np.hypot(rel[..., 0], rel[..., 1]), np.inf)
+    k = min(n, H)
+    order = np.argsort(dist, axis=1, kind="stable")[:, :k]
+    humans = np.zeros((B, n, F), np.float32)
+    mask = np.zeros((B, n), np.float32)
+    mask[:, :k] = np.take_along_axis(seen, order, 1)
+    humans[:, :k] = np.where(mask[:, :k, None] > 0.5, np.take_along_axis(feats, order[..., None], 1), 0.0)
+    return humans, mask
+
+
 def _robot_box() -> spaces.Box:
     return spaces.Box(-BOUND, BOUND, (9,), np.float32)
 
@@ -143,6 +172,10 @@ class RelativeObservation(Observation):
         """``(features, max_range, slots, by_id)`` of the compiled builder (:func:`agent_observations` fuses it
         with the pedestrians' observations)."""
         return 2, self.config.sensing_range, self.config.max_humans_observed, False
+
+    def fused_spec(self, world) -> tuple[int, float, int, bool] | None:
+        """:meth:`kernel_spec`: the one compiled kernel builds this observation of any one-world ``world``."""
+        return self.kernel_spec()
 
 
 @OBSERVATIONS.register("relative_by_id")
@@ -168,6 +201,10 @@ class RelativeByIdObservation(RelativeObservation):
 
     def kernel_spec(self) -> tuple[int, float, int, bool]:
         return 2, self.config.sensing_range, self.config.max_humans_observed, True
+
+    def fused_spec(self, world) -> tuple[int, float, int, bool] | None:
+        """The stateless kernel up to ``N_max`` pedestrians; ``None`` (lent slots, stateful) beyond."""
+        return self.kernel_spec() if world.num_humans <= self.config.max_humans_observed else None
 
     def build(self, world) -> dict[str, np.ndarray]:
         B, H, n = world.num_worlds, world.num_humans, self.config.max_humans_observed
@@ -205,6 +242,10 @@ class FullStateObservation(Observation):
     def kernel_spec(self) -> tuple[int, float, int, bool]:
         """See :meth:`RelativeObservation.kernel_spec`."""
         return 5, np.inf, self.config.max_humans_observed, False
+
+    def fused_spec(self, world) -> tuple[int, float, int, bool] | None:
+        """See :meth:`RelativeObservation.fused_spec`."""
+        return self.kernel_spec()
 
 
 @OBSERVATIONS.register("observed_state")
@@ -262,15 +303,9 @@ class EstimatedStateObservation(Observation):
             ok = seen & seen0 & (spawns == spawns0) & (steps == steps0 + 1)[:, None]
             vel = np.where(ok[..., None], (pos - p0) / world.dt, 0.0)
         self._last = (pos, seen, spawns.copy(), steps.copy())
-        dist = np.where(seen, np.hypot(obs["humans"][..., 0], obs["humans"][..., 1]), np.inf)
-        k = min(n, H)
-        order = np.argsort(dist, axis=1, kind="stable")[:, :k]
-        humans = np.zeros((B, n, 5), np.float32)
-        mask = np.zeros((B, n), np.float32)
-        mask[:, :k] = np.take_along_axis(seen, order, 1)
         feats = np.concatenate([obs["humans"], vel.astype(np.float32),
                                 np.full((B, H, 1), self.assumed_radius, np.float32)], -1)
-        humans[:, :k] = np.where(mask[:, :k, None] > 0.5, np.take_along_axis(feats, order[..., None], 1), 0.0)
+        humans, mask = nearest_first(obs["humans"], seen, feats, n)
         return {"robot": obs["robot"], "humans": humans, "mask": mask}
 
 
@@ -298,12 +333,12 @@ def agent_observations(builder: Observation, world) -> tuple[dict[str, np.ndarra
     """The robot's observation (``builder``, arrays with a leading dimension of 1) and every pedestrian slot's
     (:func:`human_observations`) of a one-world ``world``: one compiled call for the compiled builders
     (``relative``, ``relative_by_id``, ``full_state``: their ``kernel_spec``), the builder then the pedestrians'
-    kernel for any other."""
+    kernel for any other, or where the builder's ``fused_spec`` declines the world."""
     compiled = type(builder).build in _COMPILED_BUILDS and world.num_worlds == 1  # (a subclass may override build)
-    if not compiled or (type(builder).build is RelativeByIdObservation.build
-                        and world.num_humans > builder.config.max_humans_observed):  # lent slots: stateful
+    spec = builder.fused_spec(world) if compiled else None
+    if spec is None:
         return builder.build(world), human_observations(world, 0)
-    features, max_range, n_max, by_id = builder.kernel_spec()
+    features, max_range, n_max, by_id = spec
     cfg = world.config
     robot, humans, mask = _robot_arrays(1, n_max, features)
     me, nb, hmask = _human_arrays(world.num_humans, cfg.max_humans_observed)
