@@ -1,4 +1,5 @@
-"""``crowdbench leaderboard``: ``run`` a suite, ``list`` the entries and suites, set the board beside the ``paper``."""
+"""``crowdbench leaderboard``: ``run`` a suite, ``verify`` stored cells, ``list`` the entries and suites, set the board
+beside the ``paper``."""
 
 from __future__ import annotations
 
@@ -50,6 +51,23 @@ def leaderboard_run_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def leaderboard_verify_cmd(args: argparse.Namespace) -> int:
+    """Stored cells re-evaluated and compared bit for bit (:mod:`crowdbench.leaderboard.verify`); exit status 1 unless
+    every one is identical."""
+    from crowdbench import leaderboard
+    from crowdbench.leaderboard.verify import markdown
+
+    suite = leaderboard.load_suite(args.suite, episodes=args.episodes)
+    cells = [c.strip() for c in args.cells.split(",") if c.strip()] if args.cells else None
+    verdicts = leaderboard.verify_cells(suite, _methods(args.methods, []), args.out, cells, workers=args.workers,
+                                        backend=args.backend, ray_address=args.ray_address)
+    print(markdown(verdicts))
+    bad = [v for v in verdicts if v.status != "identical"]
+    print(f"{len(verdicts) - len(bad)} of {len(verdicts)} stored cells identical"
+          + (f"; not identical: {', '.join(f'{v.label} {v.cell} ({v.status})' for v in bad)}" if bad else ""))
+    return 1 if bad else 0
+
+
 def leaderboard_list_cmd(args: argparse.Namespace) -> int:
     """The shipped leaderboard entries, every registered policy with its shipped checkpoints, and the suites."""
     from crowdbench import leaderboard
@@ -84,7 +102,8 @@ def paper_cmd(args: argparse.Namespace) -> int:
 
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """The sub-commands of this module."""
-    p = sub.add_parser("leaderboard", help="score methods on a suite (run) or list methods and suites (list)")
+    p = sub.add_parser("leaderboard", help="score methods on a suite (run), re-check stored cells (verify), or list "
+                                           "methods and suites (list)")
     lsub = p.add_subparsers(dest="action", required=True)
     q = lsub.add_parser("run", help="evaluate methods on a suite; finished cells are stored as they finish")
     q.add_argument("--suite", default="paper", help="paper (Tables I–III, 500 episodes), quick, or a .toml path")
@@ -101,6 +120,18 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
                    help="results folder (default: leaderboards for the paper suite, else runs/leaderboard-SUITE)")
     q.add_argument("--force", action="store_true", help="re-evaluate stored cells too")
     q.set_defaults(func=leaderboard_run_cmd)
+    q = lsub.add_parser("verify", help="re-evaluate stored cells and compare them with the stored ones, bit for bit")
+    q.add_argument("--suite", default="paper", help="the suite the cells belong to (default paper)")
+    q.add_argument("--episodes", type=int, default=None, help="the episodes per cell the cells were run with, if "
+                                                              "run overrode the suite's")
+    q.add_argument("--methods", default=None, help="comma-separated entries, as for run (default: every shipped entry)")
+    q.add_argument("--cells", default=None, metavar="KEY,...",
+                   help="cell keys such as I-medium,II-n-20 (the file stems under OUT/cells/ENTRY/; default: all)")
+    q.add_argument("--workers", type=int, default=1, help="cells evaluated in parallel (processes or Ray tasks)")
+    q.add_argument("--backend", default="local", help="local (this machine) or ray (crowdbench[ray])")
+    q.add_argument("--ray-address", default=None, help="an existing Ray cluster (default: a local Ray instance)")
+    q.add_argument("--out", default="leaderboards", help="the leaderboard folder (default leaderboards)")
+    q.set_defaults(func=leaderboard_verify_cmd)
     q = lsub.add_parser("paper", help="every stored cell beside the paper's Tables I–III (reads cells only)")
     q.add_argument("--out", default="leaderboards", help="the leaderboard folder (default leaderboards)")
     q.add_argument("--md", default=None, help="markdown file to write (default OUT/PAPER.md)")

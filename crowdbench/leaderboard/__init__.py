@@ -8,7 +8,8 @@
 5. :mod:`~crowdbench.leaderboard.run` — the cells not stored, in this process, local workers or Ray tasks, faults
    isolated per cell;
 6. :mod:`~crowdbench.leaderboard.report` — tables, ``LEADERBOARD.md``, :mod:`~crowdbench.leaderboard.figures`, and
-   :mod:`~crowdbench.leaderboard.paper` (the board beside the paper's numbers).
+   :mod:`~crowdbench.leaderboard.paper` (the board beside the paper's numbers);
+7. :mod:`~crowdbench.leaderboard.verify` — stored cells re-evaluated and compared bit for bit.
 
 The names below are importable from the package itself (loaded on first use: importing the package is cheap).
 """
@@ -24,7 +25,9 @@ _EXPORTS = {
                 "shipped_entries", "trained_crowd"),
     "cells": ("cell_key", "entry_sensing", "fingerprint", "policy_code", "scenario_digest", "suite_digest"),
     "store": ("CellStore",),
-    "run": ("BACKENDS", "cpu_model", "evaluate_cells", "print_progress", "provenance", "run_cell", "run_suite"),
+    "run": ("BACKENDS", "cpu_model", "evaluate_cells", "execute", "print_progress", "provenance", "run_cell",
+            "run_suite"),
+    "verify": ("Verdict", "verify_cells"),
     "report": ("SOCIAL", "TABLE_TITLES", "gather", "leaderboard_markdown", "markdown", "save", "training_budgets",
                "with_pooled", "write_board"),
     "figures": ("legend_label", "plot_board", "plot_trends"),

@@ -122,6 +122,22 @@ def _run_ray(tasks: list[Task], workers: int, address: str | None) -> Iterable[t
             ray.shutdown()
 
 
+def check_backend(backend: str, workers: int) -> None:
+    """One clear error for a backend or worker count that :func:`execute` cannot use."""
+    if backend not in BACKENDS:
+        raise ValueError(f"--backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
+    if not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"--workers {workers!r}; valid choices: an integer ≥ 1")
+
+
+def execute(tasks: list[Task], workers: int = 1, backend: str = "local",
+            ray_address: str | None = None) -> Iterable[tuple[Task, dict[str, Any]]]:
+    """:func:`run_cell` on every task — in this process (``workers`` 1), in local worker processes, or as Ray tasks
+    — yielding ``(task, outcome)`` as each finishes."""
+    check_backend(backend, workers)
+    return _run_local(tasks, workers) if backend == "local" else _run_ray(tasks, workers, ray_address)
+
+
 # ---------------------------------------------------------------------------------------------------- a run
 def run_suite(suite: Suite, entries: list[Entry], out: str, workers: int = 1, backend: str = "local",
         ray_address: str | None = None, force: bool = False,
@@ -130,13 +146,10 @@ def run_suite(suite: Suite, entries: list[Entry], out: str, workers: int = 1, ba
     finishes, then write the report (:func:`~crowdbench.leaderboard.report.write_board`: each entry's
     ``OUT/<slug>.json|md``, ``OUT/LEADERBOARD.md`` and the figures); returns the result rows by label (an errored
     cell is a row with ``error``)."""
-    if backend not in BACKENDS:
-        raise ValueError(f"--backend {backend!r}; valid choices: {', '.join(BACKENDS)}")
-    if not isinstance(workers, int) or workers < 1:
-        raise ValueError(f"--workers {workers!r}; valid choices: an integer ≥ 1")
     labels = [e.label for e in entries]
     if len(set(labels)) != len(labels):
         raise ValueError(f"methods: duplicate labels {sorted({lb for lb in labels if labels.count(lb) > 1})}")
+    check_backend(backend, workers)
     store = CellStore(out)
     grid = suite.grid()
     fps = {e.label: fingerprint(e, suite) for e in entries}
@@ -153,7 +166,7 @@ def run_suite(suite: Suite, entries: list[Entry], out: str, workers: int = 1, ba
     say(f"suite {suite.name}: {len(entries)} methods × {len(grid)} cells; {len(outcomes)} stored, "
         f"{len(todo)} to run ({suite.episodes} episodes each, backend {backend}, {workers} worker(s))")
     t0 = time.time()
-    source = _run_local(todo, workers) if backend == "local" else _run_ray(todo, workers, ray_address)
+    source = execute(todo, workers, backend, ray_address)
     for k, ((e, c, _), outcome) in enumerate(source, 1):
         store.put(e, c, fps[e.label], outcome)
         outcomes[(e.label, cell_key(c))] = outcome
