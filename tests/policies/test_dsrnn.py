@@ -49,6 +49,26 @@ def test_rollout_steps_and_padded_trajectories_agree():
     torch.testing.assert_close(batched, stepped, rtol=1e-5, atol=1e-6)
 
 
+def test_update_on_state_parts_has_the_joined_states_gradients():
+    """The update steps the state's parts (no join and re-slice per step): the same outputs, and the same gradients
+    up to the order autograd sums them in."""
+    core, g = _core(), torch.Generator().manual_seed(2)
+    T, n = 6, 5
+    xs = torch.stack([_obs(n, g) for _ in range(T)])
+    h0 = torch.randn(1, n, core.state_dim, generator=g) * 0.1
+    w = torch.randn(T, n, DSRNNConfig().latent, generator=g)
+    (core(xs, torch.ones(T, n, dtype=torch.bool), h0) * w).sum().backward()
+    parts_grads = [p.grad.clone() for p in core.parameters()]
+    core.zero_grad()
+    h, outs = h0[0], []
+    for t in range(T):  # the joined state, as the rollout steps it
+        out, h = core.cell(xs[t], h)
+        outs.append(out)
+    (torch.stack(outs) * w).sum().backward()
+    for a, b in zip(parts_grads, (p.grad for p in core.parameters()), strict=True):
+        torch.testing.assert_close(a, b, rtol=1e-5, atol=1e-6)
+
+
 def test_attention_ignores_slots_out_of_view_and_slot_order():
     core, g = _core(), torch.Generator().manual_seed(2)
     n = 5

@@ -126,25 +126,43 @@ class DSRNNCore(CarriedState):
 
     def cell(self, x: torch.Tensor, h: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """One step: observations ``(n, 9 + 3·slots)``, states ``(n, state_dim)`` → latents ``(n, latent)``, new
-        states."""
-        n, K, R = x.shape[0], self.slots, self.cfg.edge_rnn
+        states (:meth:`split` / :meth:`join` around :meth:`step_parts`)."""
+        out, parts = self.step_parts(x, self.split(h))
+        return out, self.join(parts)
+
+    def split(self, h: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """The state ``(n, state_dim)`` as its parts: temporal edge ``(n, R)``, spatial edges ``(n·slots, R)``, node
+        ``(n, N)``."""
+        R, K = self.cfg.edge_rnn, self.slots
+        return h[:, :R], h[:, R:R + K * R].reshape(h.shape[0] * K, R), h[:, R + K * R:]
+
+    def join(self, parts: tuple[torch.Tensor, torch.Tensor, torch.Tensor]) -> torch.Tensor:
+        """:meth:`split`'s inverse: ``(n, state_dim)``."""
+        ht, hs, hn = parts
+        return torch.cat([ht, hs.reshape(ht.shape[0], -1), hn], -1)
+
+    def step_parts(self, x: torch.Tensor, parts: tuple[torch.Tensor, torch.Tensor, torch.Tensor]
+                   ) -> tuple[torch.Tensor, tuple[torch.Tensor, torch.Tensor, torch.Tensor]]:
+        """One step on the state's parts (:meth:`split`): the update carries them from step to step as they are,
+        so that no step joins and re-slices the whole state (nor zero-fills its gradient for each slice)."""
+        n, K = x.shape[0], self.slots
         robot, rel, mask = x[:, :9], x[:, 9:9 + 2 * K].reshape(n, K, 2), x[:, 9 + 2 * K:] > 0.5
         if self.cfg.slots == "nearest":  # CrowdNav++: unseen slots are a far dummy, stepped and attended like the rest
             rel = torch.where(mask.unsqueeze(-1), rel, DUMMY)
             mask = torch.ones_like(mask)
-        ht, hs, hn = h[:, :R], h[:, R:R + K * R].reshape(n * K, R), h[:, R + K * R:]
+        ht, hs, hn = parts
         ht = self.temporal_rnn(self.temporal_embed(robot[:, 7:9]), ht)
         seen = mask.reshape(n * K)
         hs = hs.clone()
         hs[seen] = self.spatial_rnn(self.spatial_embed(rel.reshape(n * K, 2)[seen]), hs[seen])  # in view only
-        hs = hs.reshape(n, K, R)
-        score = (self.key(hs) @ self.query(ht).unsqueeze(-1)).squeeze(-1) * (K / math.sqrt(self.cfg.attention))
+        hk = hs.reshape(n, K, -1)
+        score = (self.key(hk) @ self.query(ht).unsqueeze(-1)).squeeze(-1) * (K / math.sqrt(self.cfg.attention))
         weights = torch.softmax(score.masked_fill(~mask, -torch.inf), dim=-1)
         weights = torch.where(mask.any(-1, keepdim=True), weights, 0.0)  # nobody in view: nothing attended
-        attended = (weights.unsqueeze(-1) * hs).sum(1)
+        attended = (weights.unsqueeze(-1) * hk).sum(1)
         edges = self.edge_features(torch.cat([ht, attended], -1))
         hn = self.node_rnn(torch.cat([self.robot_embed(robot[:, :ROBOT_NODE]), edges], -1), hn)
-        return self.node_out(hn), torch.cat([ht, hs.reshape(n, K * R), hn], -1)
+        return self.node_out(hn), (ht, hs, hn)
 
     def forward(self, x: torch.Tensor, masks: torch.Tensor | None = None,
                 hidden_state: torch.Tensor | None = None) -> torch.Tensor:
@@ -158,9 +176,9 @@ class DSRNNCore(CarriedState):
             return out.unsqueeze(0)
         if hidden_state is None:
             raise ValueError("DSRNNCore: the update needs the stored initial hidden states")
-        h, outs = hidden_state[0], []
+        parts, outs = self.split(hidden_state[0]), []
         for t in range(x.shape[0]):
-            out, h = self.cell(x[t], h)
+            out, parts = self.step_parts(x[t], parts)
             outs.append(out)
         return unpad_trajectories(torch.stack(outs), masks)
 
