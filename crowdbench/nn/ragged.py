@@ -9,6 +9,13 @@ it (blocking and dispatch built for long sequences); these loops ≈ 1 µs.
 
 Queries are either every token (``robot_only=False``) or only each sample's first token (``robot_only=True``, the
 H²INT last stage), one query row per sample in that case.
+
+Three entry points, one kernel: :func:`ragged_attention` (queries, keys and values as three tensors),
+:func:`ragged_attention_qkv` (one ``(T, 3d)`` projection ``[q | k | v]``, as an attention layer's fused input
+projection makes it) and :func:`ragged_attention_kv` (queries apart, ``(T, 2d)`` ``[k | v]``). The packed forms
+return one gradient for the packed tensor, its blocks side by side, where autograd would zero-fill a full-width
+gradient for each block it was sliced into and sum them; the numbers are the same bit for bit (tested). The kernel
+reads contiguous ``(·, d)`` blocks: on column views of the packed array its compiled sums round differently.
 """
 
 from __future__ import annotations
@@ -102,35 +109,58 @@ def _backward(q, k, v, offsets, robot_only, heads, probs, gout, gq, gk, gv):  # 
             qi += 1
 
 
-def _run(q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets: np.ndarray, robot_only: bool,
-         heads: int) -> tuple[np.ndarray, ...]:
-    """The forward kernel on contiguous copies; returns ``(out, q, k, v, probs)`` as arrays."""
-    qn, kn, vn = (t.detach().contiguous().numpy() for t in (q, k, v))
+def _blocks(tensors: tuple[torch.Tensor, ...], d: int) -> list[np.ndarray]:
+    """The ``(·, d)`` column blocks of ``tensors`` in order (q, k, v), each a C-contiguous array."""
+    out = []
+    for t in tensors:
+        a = t.detach().numpy()
+        out += [np.ascontiguousarray(a[:, i:i + d]) for i in range(0, a.shape[1], d)]
+    return out
+
+
+def _run(q: np.ndarray, k: np.ndarray, v: np.ndarray, offsets: np.ndarray, robot_only: bool,
+         heads: int) -> tuple[np.ndarray, np.ndarray]:
+    """The forward kernel on contiguous blocks; returns ``(out, probs)``."""
     sizes = np.diff(offsets)
     probs = np.empty(int(heads * (sizes.sum() if robot_only else (sizes * sizes).sum())), np.float32)
-    out = np.empty_like(qn)
+    out = np.empty_like(q)
     out[offsets.shape[0] - 1 if robot_only else offsets[-1]:] = 0.0  # rows past the samples' (padding)
-    _forward(qn, kn, vn, offsets, robot_only, heads, probs, out)
-    return out, qn, kn, vn, probs
+    _forward(q, k, v, offsets, robot_only, heads, probs, out)
+    return out, probs
 
 
 class RaggedAttention(torch.autograd.Function):
-    """``out = softmax(q kᵀ / √d_h) v`` per head within each sample's rows; see the module docstring."""
+    """``out = softmax(q kᵀ / √d_h) v`` per head within each sample's rows, ``q``, ``k``, ``v`` the ``(·, d)`` column
+    blocks of ``tensors`` in order (three tensors, ``[q | k | v]``, or ``q`` and ``[k | v]``); one gradient per
+    tensor. See the module docstring."""
 
     @staticmethod
-    def forward(ctx, q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets: np.ndarray,  # type: ignore[override]
-                robot_only: bool, heads: int) -> torch.Tensor:
-        out, qn, kn, vn, probs = _run(q, k, v, offsets, robot_only, heads)
-        ctx.saved = (qn, kn, vn, offsets, robot_only, heads, probs)
+    def forward(ctx, d: int, offsets: np.ndarray, robot_only: bool, heads: int,  # type: ignore[override]
+                *tensors: torch.Tensor) -> torch.Tensor:
+        q, k, v = _blocks(tensors, d)
+        out, probs = _run(q, k, v, offsets, robot_only, heads)
+        ctx.saved = (q, k, v, offsets, robot_only, heads, probs, [t.shape[1] // d for t in tensors])
         return torch.from_numpy(out)
 
     @staticmethod
     def backward(ctx, gout: torch.Tensor):  # type: ignore[override]
-        qn, kn, vn, offsets, robot_only, heads, probs = ctx.saved
-        gq, gk, gv = np.zeros_like(qn), np.zeros_like(kn), np.zeros_like(vn)
-        _backward(qn, kn, vn, offsets, robot_only, heads, probs, gout.contiguous().numpy(), gq, gk, gv)
+        q, k, v, offsets, robot_only, heads, probs, per_tensor = ctx.saved
+        grads = [np.zeros_like(q), np.zeros_like(k), np.zeros_like(v)]
+        _backward(q, k, v, offsets, robot_only, heads, probs, gout.contiguous().numpy(), *grads)
         ctx.saved = None
-        return torch.from_numpy(gq), torch.from_numpy(gk), torch.from_numpy(gv), None, None, None
+        out, i = [], 0
+        for n in per_tensor:  # each tensor's blocks side by side
+            out.append(torch.from_numpy(grads[i] if n == 1 else np.concatenate(grads[i:i + n], axis=1)))
+            i += n
+        return (None,) * 4 + tuple(out)
+
+
+def _attend(tensors: tuple[torch.Tensor, ...], d: int, offsets: np.ndarray, robot_only: bool,
+            heads: int) -> torch.Tensor:
+    """Differentiable when any of ``tensors`` needs a gradient, else the forward kernel alone."""
+    if torch.is_grad_enabled() and any(t.requires_grad for t in tensors):
+        return RaggedAttention.apply(d, offsets, robot_only, heads, *tensors)
+    return torch.from_numpy(_run(*_blocks(tensors, d), offsets, robot_only, heads)[0])
 
 
 def row_offsets(counts: torch.Tensor) -> np.ndarray:
@@ -145,6 +175,17 @@ def ragged_attention(q: torch.Tensor, k: torch.Tensor, v: torch.Tensor, offsets:
                      heads: int) -> torch.Tensor:
     """Attention within each sample's token rows: ``q`` ``(T, d)`` (or ``(B, d)`` when ``robot_only``), ``k``, ``v``
     ``(T, d)``, ``offsets`` ``(B + 1,)`` int64 row boundaries → ``(rows of q, d)``. Differentiable."""
-    if torch.is_grad_enabled() and (q.requires_grad or k.requires_grad or v.requires_grad):
-        return RaggedAttention.apply(q, k, v, offsets, robot_only, heads)
-    return torch.from_numpy(_run(q, k, v, offsets, robot_only, heads)[0])
+    return _attend((q, k, v), k.shape[1], offsets, robot_only, heads)
+
+
+def ragged_attention_qkv(qkv: torch.Tensor, offsets: np.ndarray, heads: int) -> torch.Tensor:
+    """:func:`ragged_attention` of every token (``robot_only=False``) on the blocks of ``qkv`` ``(T, 3d)`` =
+    ``[q | k | v]`` → ``(T, d)``; one gradient for ``qkv``. Differentiable."""
+    return _attend((qkv,), qkv.shape[1] // 3, offsets, False, heads)
+
+
+def ragged_attention_kv(q: torch.Tensor, kv: torch.Tensor, offsets: np.ndarray, robot_only: bool,
+                        heads: int) -> torch.Tensor:
+    """:func:`ragged_attention` with keys and values the blocks of ``kv`` ``(T, 2d)`` = ``[k | v]``; one gradient for
+    ``kv``. Differentiable."""
+    return _attend((q, kv), q.shape[1], offsets, robot_only, heads)

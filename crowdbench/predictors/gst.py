@@ -27,7 +27,7 @@ import torch
 import torch.nn.functional as F  # noqa: N812 - the usual alias
 from torch import nn
 
-from crowdbench.nn.ragged import ragged_attention, row_offsets
+from crowdbench.nn.ragged import ragged_attention_qkv, row_offsets
 from crowdbench.predictors.base import HORIZON, OBSERVED, PREDICTORS, Predictor, Track
 
 METHOD = "gst"
@@ -74,13 +74,13 @@ class GSTModel(nn.Module):
     def _attend(self, x: torch.Tensor, offsets: np.ndarray) -> torch.Tensor:
         """One pre-LayerNorm Transformer layer (the weights of ``self.spatial``) on the packed tokens ``x`` ``(P, E)``,
         scene ``b`` owning rows ``offsets[b]:offsets[b+1]``: attention within each scene's rows
-        (:func:`~crowdbench.nn.ragged.ragged_attention`), every other product on the ``P`` tokens at once."""
+        (:func:`~crowdbench.nn.ragged.ragged_attention_qkv`), every other product on the ``P`` tokens at once."""
         for layer in self.spatial.layers:
             attn = layer.self_attn
             E = x.shape[-1]
             h = F.layer_norm(x, (E,), layer.norm1.weight, layer.norm1.bias, layer.norm1.eps)
             qkv = F.linear(h, attn.in_proj_weight, attn.in_proj_bias)  # (P, 3E)
-            o = ragged_attention(qkv[:, :E], qkv[:, E:2 * E], qkv[:, 2 * E:], offsets, False, attn.num_heads)
+            o = ragged_attention_qkv(qkv, offsets, attn.num_heads)
             x = x + F.linear(o, attn.out_proj.weight, attn.out_proj.bias)
             h = F.layer_norm(x, (E,), layer.norm2.weight, layer.norm2.bias, layer.norm2.eps)
             x = x + layer.linear2(F.relu(layer.linear1(h)))

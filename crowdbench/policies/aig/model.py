@@ -31,7 +31,7 @@ import torch
 import torch.nn.functional as F  # noqa: N812 - the usual alias
 from torch import nn
 
-from crowdbench.nn.ragged import ragged_attention, row_offsets
+from crowdbench.nn.ragged import ragged_attention_qkv, row_offsets
 from crowdbench.policies.nets import RecurrentCell, RecurrentTrunkActor, check_action_std, gaussian_cfg
 
 
@@ -141,7 +141,7 @@ class AIGActor(RecurrentTrunkActor):
 
         The pedestrians in view are packed into ``(P, ·)`` rows (row ``b`` of the batch owning ``offsets[b]:
         offsets[b+1]``): every per-pedestrian product runs once over the ``P`` rows, the self-attention within each
-        row's pedestrians (:func:`crowdbench.nn.ragged.ragged_attention`), the robot–pedestrian softmax per segment;
+        row's pedestrians (:func:`crowdbench.nn.ragged.ragged_attention_qkv`), the robot–pedestrian softmax per segment;
         the original's two consecutive linear maps per attention input (``self.q`` then the attention's own input
         projection) run as one product of the two (the same function; its gradient reaches both). Equal to
         :meth:`encode_samples_reference` (the original's padded layout) up to rounding (tested)."""
@@ -171,9 +171,8 @@ class AIGActor(RecurrentTrunkActor):
         counts = m.sum(-1)  # (R,) pedestrians in view per row, nearest first
         offsets = row_offsets(counts)  # row b owns packed rows offsets[b]:offsets[b+1]
         e = self.edge_embed(humans[m])  # (P, W) packed
-        W = e.shape[-1]
         qkv = self._qkv(e)  # (P, 3W)
-        z = ragged_attention(qkv[:, :W], qkv[:, W:2 * W], qkv[:, 2 * W:], offsets, False, self.self_attn.num_heads)
+        z = ragged_attention_qkv(qkv, offsets, self.self_attn.num_heads)
         h = self.human_out(self.self_attn.out_proj(z))  # (P, human_embed)
         seg = torch.repeat_interleave(torch.arange(len(counts)), counts)  # (P,) each pedestrian's row
         score = (self.key(h) * self.query(r).index_select(0, seg)).sum(-1)

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 import torch.nn as nn
 
-from crowdbench.nn.ragged import ragged_attention
+from crowdbench.nn.ragged import ragged_attention_kv, ragged_attention_qkv
 from crowdbench.policies.h2int._kernels.fast_linear import linear, padded_rows
 from crowdbench.policies.h2int._kernels.fused_gate import fused_gate
 
@@ -57,10 +57,10 @@ def _stage(stage: nn.Module, x: torch.Tensor, offsets: np.ndarray, robot_rows: t
         kv = linear(h, w[d:], b[d:])
         q = linear(h[robot_rows], w[:d], b[:d])
         x = x[robot_rows]
-        att = ragged_attention(q, kv[:, :d], kv[:, d:], offsets, robot_only, stage.heads)
+        att = ragged_attention_kv(q, kv, offsets, robot_only, stage.heads)
     else:
         qkv = linear(h, w, b)
-        att = ragged_attention(qkv[:, :d], qkv[:, d:2 * d], qkv[:, 2 * d:], offsets, robot_only, stage.heads)
+        att = ragged_attention_qkv(qkv, offsets, stage.heads)
     # gated: the output projection only feeds the gate's W, so it is folded into it
     y = fused_gate(stage.gate1, x, att, stage.out) if stage.gated else x + _apply(stage.out, att)
     f = _apply(stage.ffn, stage.ln2(y))
