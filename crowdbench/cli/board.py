@@ -36,14 +36,19 @@ def _methods(spec: str | None, add: list[str]) -> list:
     return chosen + [leaderboard.parse_entry(a) for a in add]
 
 
+def _default_out(args: argparse.Namespace, suite: str) -> str:
+    """``--out``, else ``leaderboards`` for the paper suite as shipped, else ``runs/leaderboard-SUITE``."""
+    return args.out or ("leaderboards" if args.suite == "paper" and args.episodes is None
+                        else os.path.join("runs", f"leaderboard-{suite}"))
+
+
 def leaderboard_run_cmd(args: argparse.Namespace) -> int:
     """A suite for every chosen method → ``OUT/<method>.json|md``, ``OUT/cells/`` and ``OUT/LEADERBOARD.md``."""
     from crowdbench import leaderboard
 
     suite = leaderboard.load_suite(args.suite, episodes=args.episodes)
     entries = _methods(args.methods, args.add)
-    out = args.out or ("leaderboards" if args.suite == "paper" and args.episodes is None
-                       else os.path.join("runs", f"leaderboard-{suite.name}"))
+    out = _default_out(args, suite.name)
     leaderboard.run_suite(suite, entries, out, workers=args.workers, backend=args.backend,
                           ray_address=args.ray_address, force=args.force, progress=leaderboard.print_progress)
     with open(os.path.join(out, "LEADERBOARD.md")) as f:
@@ -59,8 +64,8 @@ def leaderboard_verify_cmd(args: argparse.Namespace) -> int:
 
     suite = leaderboard.load_suite(args.suite, episodes=args.episodes)
     cells = [c.strip() for c in args.cells.split(",") if c.strip()] if args.cells else None
-    verdicts = leaderboard.verify_cells(suite, _methods(args.methods, []), args.out, cells, workers=args.workers,
-                                        backend=args.backend, ray_address=args.ray_address)
+    verdicts = leaderboard.verify_cells(suite, _methods(args.methods, []), _default_out(args, suite.name), cells,
+                                        workers=args.workers, backend=args.backend, ray_address=args.ray_address)
     print(markdown(verdicts))
     bad = [v for v in verdicts if v.status != "identical"]
     print(f"{len(verdicts) - len(bad)} of {len(verdicts)} stored cells identical"
@@ -130,7 +135,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     q.add_argument("--workers", type=int, default=1, help="cells evaluated in parallel (processes or Ray tasks)")
     q.add_argument("--backend", default="local", help="local (this machine) or ray (crowdbench[ray])")
     q.add_argument("--ray-address", default=None, help="an existing Ray cluster (default: a local Ray instance)")
-    q.add_argument("--out", default="leaderboards", help="the leaderboard folder (default leaderboards)")
+    q.add_argument("--out", default=None,
+                   help="results folder (default, as for run: leaderboards for the paper suite, else "
+                        "runs/leaderboard-SUITE)")
     q.set_defaults(func=leaderboard_verify_cmd)
     q = lsub.add_parser("paper", help="every stored cell beside the paper's Tables I–III (reads cells only)")
     q.add_argument("--out", default="leaderboards", help="the leaderboard folder (default leaderboards)")
