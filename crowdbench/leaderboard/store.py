@@ -23,14 +23,19 @@ class CellStore:
     def path(self, entry: Entry, cell: Cell) -> str:
         return os.path.join(self.root, entry.slug, f"{cell_key(cell)}.json")
 
-    def get(self, entry: Entry, cell: Cell, fp: dict[str, Any]) -> dict[str, Any] | None:
-        """The stored outcome if computed under ``fp`` (errors are not reused: they are retried)."""
+    def read(self, entry: Entry, cell: Cell) -> dict[str, Any] | None:
+        """The stored file as it is (fingerprint, outcome, ``cpu``), whatever it was computed under; ``None`` when
+        there is none or it cannot be read."""
         try:
             with open(self.path(entry, cell)) as f:
-                saved = json.load(f)
+                return json.load(f)
         except (FileNotFoundError, json.JSONDecodeError):
             return None
-        if saved.get("fingerprint") != fp or "result" not in saved:
+
+    def get(self, entry: Entry, cell: Cell, fp: dict[str, Any]) -> dict[str, Any] | None:
+        """The stored outcome if computed under ``fp`` (errors are not reused: they are retried)."""
+        saved = self.read(entry, cell)
+        if saved is None or saved.get("fingerprint") != fp or "result" not in saved:
             return None
         return saved
 

@@ -10,7 +10,8 @@ CPUs) — either way the stored number is not what this checkout computes, and `
 remakes it.
 
 Statuses: ``identical``; ``differs`` (the fields that do); ``stale`` (the fingerprint no longer matches: ``run``
-would recompute it anyway; not re-evaluated); ``missing`` (not stored); ``error`` (the re-evaluation raised).
+would recompute it anyway; not re-evaluated); ``missing`` (not stored, or unreadable); ``error`` (the
+re-evaluation raised).
 """
 
 from __future__ import annotations
@@ -96,10 +97,8 @@ def verify_cells(suite: Suite, entries: list[Entry], out: str, cells: list[str] 
         fp = fingerprint(e, suite)
         for c in chosen:
             key = (e.label, cell_key(c))
-            try:
-                with open(store.path(e, c)) as f:
-                    stored = json.load(f)
-            except FileNotFoundError:
+            stored = store.read(e, c)
+            if stored is None:
                 verdicts[key] = Verdict(*key, "missing")
                 continue
             old = stored.get("fingerprint", {})
