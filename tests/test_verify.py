@@ -43,7 +43,8 @@ def test_identical_then_each_kind_of_change_is_reported(tmp_path):
     cells = [cell_key(c) for c in s.grid()]
     verdicts = leaderboard.verify_cells(s, entries, out, workers=2)
     assert [(v.cell, v.status) for v in verdicts] == [(k, "identical") for k in cells]
-    assert all(v.cpu == (cpu_model(), cpu_model()) and v.seconds > 0 for v in verdicts)
+    assert [v.cpu for v in verdicts] == [(cpu_model(), cpu_model())] * len(cells)
+    assert all(v.seconds >= 0 for v in verdicts)  # stored to 0.1 s: a 4-episode ORCA cell can round to 0.0
 
     store = tmp_path / "cells" / "orca"
     cell = json.loads((store / f"{cells[0]}.json").read_text())
