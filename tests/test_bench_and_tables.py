@@ -204,3 +204,49 @@ def test_value_policies_decide_bitwise_alike_on_one_and_two_threads(name):
             world.step(one)
     finally:
         torch.set_num_threads(before)
+
+
+def test_a_methods_checkpoints_at_another_sensing_tier_become_rows_of_that_tier(monkeypatch):
+    """``sarl-velocities`` (and its seeds) shipped beside ``sarl`` are the rows ``sarl-velocities``,
+    ``sarl-velocities-seed<k>``; a tier checkpoint trained on another crowd stays off the board."""
+    from crowdbench import checkpoints
+
+    shipped = {"sarl": ["sarl", "sarl-seed1", "sarl-velocities", "sarl-velocities-seed1", "sarl-velocities-seed2"],
+               "cadrl": ["cadrl", "cadrl-full"]}
+    monkeypatch.setattr(checkpoints, "shipped_names", lambda method: shipped.get(method, []))
+    monkeypatch.setattr(leaderboard.entries, "trained_crowd",
+                        lambda path: "old" if path.endswith("cadrl-full.pt") else crowd_digest())
+    monkeypatch.setattr(leaderboard.entries, "STALE", {})
+    entries = leaderboard.shipped_entries()
+    assert entries["sarl-velocities"].policy_kwargs() == {"checkpoint": "sarl-velocities"}
+    assert entries["sarl-velocities"].group == "main"
+    assert entries["sarl-velocities-seed2"].group == "seeds:sarl-velocities"
+    assert entries["sarl-seed1"].group == "seeds:sarl" and "sarl-velocities-seed1" not in [
+        e.label for e in entries.values() if e.group == "seeds:sarl"]
+    assert "cadrl-full" not in entries and "cadrl-full" in leaderboard.entries.STALE
+    assert "cadrl-velocities" not in entries and "cadrl-velocities" not in leaderboard.entries.STALE  # not shipped
+
+
+def test_the_velocities_section_says_what_true_velocities_are_worth(tmp_path):
+    """Each method with rows at both tiers gets its seed means side by side and their difference; the figure draws
+    the other tier dashed."""
+    def rows(p):
+        return [{"policy": "x", "table": "I", "row": "High", "responsiveness": 0.7, "humans": 20,
+                 "success_rate": p, "collision_rate": 1 - p, "timeout_rate": 0.0, "nav_time": 10.0,
+                 "ci": {"success_rate": [p - 0.02, p + 0.02]}}]
+
+    board = {"orca": rows(0.9), "orca-velocities": rows(0.95), "sarl": rows(0.8), "sarl-seed1": rows(0.9),
+             "sarl-velocities": rows(0.96), "sarl-velocities-seed1": rows(0.94), "cadrl": rows(0.5)}
+    groups = {"orca": "main", "orca-velocities": "main", "sarl": "main", "sarl-seed1": "seeds:sarl",
+              "sarl-velocities": "main", "sarl-velocities-seed1": "seeds:sarl-velocities", "cadrl": "main"}
+    sensing = {lb: "velocities" if "velocities" in lb else "positions" for lb in board}
+    md = leaderboard.leaderboard_markdown(board, groups, planners=frozenset({"orca", "orca-velocities"}),
+                                          sensing=sensing)
+    main = md.split("## Rows at `sensing=velocities`")[0]
+    assert "| sarl-velocities |" not in main and "| sarl |" in main  # not ranked with the positions rows
+    section = md.split("### What `sensing=velocities` is worth")[1]
+    assert "| setting | orca (—) | sarl (2 / 2) |" in section and "cadrl" not in section
+    assert "| Table I High | 90.0 → 95.0 (+5.0) | 85.0 → 95.0 (+10.0) |" in section
+    assert "is worth" not in leaderboard.leaderboard_markdown({"sarl": rows(0.8)}, {"sarl": "main"})
+    leaderboard.plot_board(board, str(tmp_path / "success.png"), groups, sensing=sensing)
+    assert (tmp_path / "success.png").stat().st_size > 10_000

@@ -64,21 +64,28 @@ STALE: dict[str, str] = {}
 """Shipped learned entries left off the board (label → why): their checkpoint was trained on another crowd."""
 
 
+OTHER_TIERS = ("velocities", "full")
+"""Sensing tiers a main entry's checkpoint may also ship at: ``<name>-<tier>`` (and its seeds
+``<name>-<tier>-seed<k>``) is the row ``<label>-<tier>`` — e.g. ``sarl-velocities``, SARL trained and run with
+true velocities — shown in the board's section of that tier beside the ``positions`` row."""
+
+
 def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
     """``methods`` whose checkpoint is shipped and was trained on the current crowd (a learned method appears once
     such a checkpoint lands; the others are listed in :data:`STALE`), each main or ablation entry followed by its
-    other shipped training seeds (checkpoints ``<name>-seed<k>``, group ``seeds:<label>``)."""
+    other shipped training seeds (checkpoints ``<name>-seed<k>``, group ``seeds:<label>``); a main entry's
+    checkpoints at another sensing tier (:data:`OTHER_TIERS`: ``<name>-<tier>``, their seeds
+    ``<name>-<tier>-seed<k>``) follow as the rows ``<label>-<tier>`` and their seeds."""
     out: dict[str, Entry] = {}
     current = crowd_digest()
-    for e in methods:
-        ckpt = e.policy_kwargs().get("checkpoint")
-        names = checkpoints.shipped_names(e.policy) if ckpt else []
+
+    def add(e: Entry, ckpt: str | None, names: list[str]) -> None:
         if ckpt and ckpt not in names:
-            continue
+            return
         if ckpt and trained_crowd(checkpoints.resolve(e.policy, ckpt)) != current:
             STALE[e.label] = ("trained on crowdbench's former crowd, not on the current CrowdNav++ one; back once "
                               "retrained (`crowdbench train`)")
-            continue
+            return
         out[e.slug] = e
         if e.group in ("main", "ablation") and ckpt:
             seeds = sorted((int(m[1]), n) for n in names if (m := re.fullmatch(rf"{re.escape(ckpt)}-seed(\d+)", n)))
@@ -87,6 +94,15 @@ def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
                     continue
                 seed_entry = Entry(f"{e.label}-seed{k}", e.policy, (("checkpoint", name),), f"seeds:{e.label}")
                 out[seed_entry.slug] = seed_entry
+
+    for e in methods:
+        ckpt = e.policy_kwargs().get("checkpoint")
+        names = checkpoints.shipped_names(e.policy) if ckpt else []
+        add(e, ckpt, names)
+        if e.group == "main" and ckpt:
+            for tier in OTHER_TIERS:
+                add(Entry(f"{e.label}-{tier}", e.policy, (("checkpoint", f"{ckpt}-{tier}"),)), f"{ckpt}-{tier}",
+                    names)
     return out
 
 

@@ -18,12 +18,15 @@ def legend_label(label: str, n_seeds: int, trained: bool = True) -> str:
 
 
 def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[str, str] | None = None,
-               rows: str = "main", reference: str = REFERENCE_METHOD, planners: frozenset[str] = frozenset()) -> None:
+               rows: str = "main", reference: str = REFERENCE_METHOD, planners: frozenset[str] = frozenset(),
+               sensing: dict[str, str] | None = None) -> None:
     """Success against the response regime ρ (Table I, N = 20) and against crowd size N (Table II, ρ = 0), one line
     per method of group ``rows`` (``main``; or ``ablation``, headed by ``reference``: the paper's ablation figure).
     A method with several training seeds (entries of group ``seeds:<label>``) is drawn at the seeds' mean, with error
     bars from the lowest to the highest seed and a band enveloping the seeds' Wilson 95 % intervals; one seed: its
-    interval. The legend gives each learned method's seed count; ``planners`` (labels with no checkpoint) get none."""
+    interval. The legend gives each learned method's seed count; ``planners`` (labels with no checkpoint) get none.
+    Methods at another sensing tier than ``positions`` (``sensing``: label → tier) are drawn dashed, their tier in the
+    legend."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -52,7 +55,10 @@ def plot_board(board: dict[str, list[dict[str, Any]]], path: str, groups: dict[s
             lo = [100 * min(p[1] for p in pts[x]) for x in xs]
             hi = [100 * max(p[2] for p in pts[x]) for x in xs]
             n_seeds = len(family)
-            (line,) = ax.plot(xs, mean, "o-", label=legend_label(label, n_seeds, label not in planners))
+            tier = (sensing or {}).get(label, "positions")
+            name = legend_label(label, n_seeds, label not in planners)
+            (line,) = ax.plot(xs, mean, "o-" if tier == "positions" else "o--",
+                              label=name if tier == "positions" or tier in label else f"{name} [{tier}]")
             ax.fill_between(xs, lo, hi, color=line.get_color(), alpha=0.15)
             if n_seeds > 1:
                 low = [100 * min(p[0] for p in pts[x]) for x in xs]

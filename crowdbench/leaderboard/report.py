@@ -145,14 +145,17 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
             "positions. Rows given more (`velocities`: true velocities and radii; `full`: everyone, privileged) "
             "have sections of their own below and are not ranked with the rest.", ""]
     board = {lb: with_pooled(rows) for lb, rows in board.items()}
+
+    def family(g: str) -> str:
+        return g.split(":", 1)[1] if ":" in g else (reference or "")
+
+    seeds_of = {lb: [lb, *(x for x in board if groups.get(x, "main").startswith("seeds")
+                           and family(groups[x]) == lb)] for lb in board if groups.get(lb, "main") == "main"}
     extra = {t: [lb for lb in board if tier[lb] == t] for t in ("velocities", "full")}
     extra = {t: lbs for t, lbs in extra.items() if lbs}
     for lbs in extra.values():
         for lb in lbs:
             groups = {**groups, lb: f"sensing:{tier[lb]}"}
-
-    def family(g: str) -> str:
-        return g.split(":", 1)[1] if ":" in g else (reference or "")
 
     seed_groups = sorted({g for g in groups.values() if g == "seeds" or g.startswith("seeds:")},
                          key=lambda g: (family(g) != reference, family(g)))
@@ -216,7 +219,48 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
             families = {lb: [lb, *(x for x in board if groups.get(x, "main").startswith("seeds")
                                    and family(groups[x]) == lb)] for lb in labels}
             out += _over_seeds(board, families, planners, ablations=group == "ablation", budgets=budgets)
+        if group.startswith("sensing"):
+            t = group.split(":", 1)[1]
+            pairs = {lb[: -len(t) - 1]: lb for lb in labels if lb in seeds_of and lb.endswith(f"-{t}")}
+            pairs = {base: lb for base, lb in pairs.items() if base in seeds_of and tier[base] == "positions"}
+            out += _tier_worth(board, {b: seeds_of[b] for b in pairs}, {b: seeds_of[lb] for b, lb in pairs.items()},
+                               t, planners)
     return "\n".join(out)
+
+
+def _tier_worth(board: dict[str, list[dict[str, Any]]], base: dict[str, list[str]], other: dict[str, list[str]],
+                tier: str, planners: frozenset[str] = frozenset()) -> list[str]:
+    """What sensing at ``tier`` is worth: for each method with rows at both tiers (``base``: its ``positions``
+    family, main label → its training seeds' labels, itself first; ``other``: the same method's family at
+    ``tier``), the mean success [%] over each family's seeds in the headline settings (Tables I, II and III pooled),
+    ``positions → tier (difference in points)``; nothing when no method has both."""
+    if not base:
+        return []
+    settings = sorted(dict.fromkeys((r["table"], r["row"]) for fam in (*base.values(), *other.values())
+                                    for lb in fam for r in board[lb]
+                                    if r["table"] != "III" or r["row"].startswith("pooled")),
+                      key=lambda s: TABLES.index(s[0]))
+
+    def mean(fam: list[str], table: str, row: str) -> float | None:
+        vals = [100 * r["success_rate"] for lb in fam for r in board[lb]
+                if r["table"] == table and r["row"] == row and "error" not in r]
+        return sum(vals) / len(vals) if len(vals) == len(fam) else None
+
+    out = [f"### What `sensing={tier}` is worth", "",
+           f"Mean success [%] over each method's shipped training seeds at `sensing=positions` → at `sensing={tier}` "
+           "(the same method given the richer input, a learned one trained with it too), and in brackets the "
+           f"difference in points. Each method's seeds are counted as positions / {tier} (— for a planner: nothing "
+           "trained).", "",
+           "| setting | " + " | ".join(f"{name} ({'—' if name in planners else f'{len(fam)} / {len(other[name])}'})"
+                                      for name, fam in base.items()) + " |",
+           "|---|" + "---|" * len(base)]
+    for t, row in settings:
+        cells_ = []
+        for name, fam in base.items():
+            a, b = mean(fam, t, row), mean(other[name], t, row)
+            cells_.append("—" if a is None or b is None else f"{a:.1f} → {b:.1f} ({b - a:+.1f})")
+        out.append(f"| Table {t} {row} | " + " | ".join(cells_) + " |")
+    return [*out, ""]
 
 
 def _mean_spread(board: dict[str, list[dict[str, Any]]], labels: list[str], table: str, row: str) -> str:
@@ -331,7 +375,8 @@ def write_board(out: str, suite: Suite, entries: list[Entry], outcomes: dict[tup
                                     sensing={lb: fp.get("sensing", "positions") for lb, fp in every_fp.items()},
                                     missing={lb: why for lb, why in STALE.items() if lb not in everyone}))
     if {"I", "II"} & set(suite.tables):
-        plot_board(everyone, os.path.join(out, "success.png"), groups, planners=planners)
+        plot_board(everyone, os.path.join(out, "success.png"), groups, planners=planners,
+                   sensing={lb: fp.get("sensing", "positions") for lb, fp in every_fp.items()})
         if "ablation" in groups.values():
             plot_board(everyone, os.path.join(out, "ablation.png"), groups, rows="ablation", planners=planners)
     return board
