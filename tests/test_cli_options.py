@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import os
 from typing import Literal
 
 import pytest
@@ -126,6 +127,24 @@ def test_value_options_reach_the_value_config(monkeypatch):
     (cfg,) = seen
     assert (cfg.rho_range, cfg.free_space, cfg.sensing, cfg.seed) == ((0.1, 0.5), True, "velocities", 3)
     assert cfg.il_episodes == 3000
+
+
+def test_a_value_run_at_another_tier_gets_a_folder_of_its_own(monkeypatch):
+    """Without ``--out`` a ``velocities`` run writes ``runs/sarl-velocities-seedS``, never the ``positions`` run's
+    ``runs/sarl-seedS``."""
+    import crowdbench.training.value as value_mod
+
+    outs = []
+
+    def fake_train_value(cfg, out, resume=None):
+        outs.append(out)
+        raise SystemExit(0)
+
+    monkeypatch.setattr(value_mod, "train_value", fake_train_value)
+    for argv in (["--sensing", "velocities", "--seed", "2"], ["--seed", "2"]):
+        with pytest.raises(SystemExit):
+            main(["train", "sarl", *argv])
+    assert outs == [os.path.join("runs", "sarl-velocities-seed2"), os.path.join("runs", "sarl-seed2")]
 
 
 def test_resumed_runs_refuse_every_non_budget_field(capsys):

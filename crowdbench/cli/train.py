@@ -132,8 +132,9 @@ def train_value_cmd(args: argparse.Namespace) -> int:
         out = args.out or os.path.dirname(os.path.abspath(path))
     else:
         cfg = ValueTrainConfig(method=args.algo, **options.given(args, train_options()))
-        out = args.out or os.path.join("runs", f"{args.algo}-seed{cfg.seed}")
-    print(f"training {cfg.method} seed={cfg.seed} → {out}")
+        tier = "" if cfg.sensing == "positions" else f"-{cfg.sensing}"  # never the positions run's folder
+        out = args.out or os.path.join("runs", f"{args.algo}{tier}-seed{cfg.seed}")
+    print(f"training {cfg.method} seed={cfg.seed} sensing={cfg.sensing} → {out}")
     trainer = train_value(cfg, out, resume=args.resume)
     print(f"wrote {os.path.join(out, 'policy.pt')}, last.pt and curve.png ({trainer.phase}: "
           f"{trainer.episode} episodes, {trainer.elapsed / 60:.1f} min)")
@@ -169,7 +170,9 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seed-workers", type=int, default=None, help="with --seeds --backend local: processes "
                                                                   "(default one per seed, at most the cores)")
     p.add_argument("--ray-address", default=None, help="with --seeds --backend ray: an existing cluster")
-    p.add_argument("--out", default=None, help="run folder (default runs/VARIANT-seedS)")
+    p.add_argument("--out", default=None,
+                   help="run folder (default runs/VARIANT-seedS; a value method at another sensing tier: "
+                        "runs/METHOD-TIER-seedS)")
     p.add_argument("--resume", default=None, help="run folder or checkpoint to continue exactly")
     p.add_argument("--init", default=None, metavar="CHECKPOINT",
                    help="start a new run from this run's network weights (same architecture; the noise fields "
