@@ -105,6 +105,15 @@ def paper_cmd(args: argparse.Namespace) -> int:
     return 0
 
 
+def compare_cmd(args: argparse.Namespace) -> int:
+    """Two methods over their training seeds, setting by setting (:mod:`crowdbench.leaderboard.compare`); reads
+    cells, runs nothing."""
+    from crowdbench.leaderboard import compare
+
+    print(compare.markdown(compare.compare(args.out, args.a, args.b)))
+    return 0
+
+
 def add_parsers(sub: argparse._SubParsersAction) -> None:
     """The sub-commands of this module."""
     p = sub.add_parser("leaderboard", help="score methods on a suite (run), re-check stored cells (verify), or list "
@@ -143,5 +152,12 @@ def add_parsers(sub: argparse._SubParsersAction) -> None:
     q.add_argument("--out", default="leaderboards", help="the leaderboard folder (default leaderboards)")
     q.add_argument("--md", default=None, help="markdown file to write (default OUT/PAPER.md)")
     q.set_defaults(func=paper_cmd)
+    q = lsub.add_parser("compare", help="two methods over their training seeds, setting by setting: means, "
+                                         "differences, seed pairs with intervals apart (reads cells only)")
+    q.add_argument("a", help="a method: LABEL (its stored entries LABEL and LABEL-seedK), LABEL, (that entry alone) or "
+                                  "LABEL,LABEL,…")
+    q.add_argument("b", help="the method to compare it with, alike")
+    q.add_argument("--out", default="leaderboards", help="the leaderboard folder (default leaderboards)")
+    q.set_defaults(func=compare_cmd)
     q = lsub.add_parser("list", help="shipped entries, registered policies with checkpoints, suites")
     q.set_defaults(func=leaderboard_list_cmd)

@@ -10,6 +10,8 @@
 6. :mod:`~crowdbench.leaderboard.report` — tables, ``LEADERBOARD.md``, :mod:`~crowdbench.leaderboard.figures`, and
    :mod:`~crowdbench.leaderboard.paper` (the board beside the paper's numbers);
 7. :mod:`~crowdbench.leaderboard.verify` — stored cells re-evaluated and compared bit for bit.
+8. :mod:`~crowdbench.leaderboard.compare` — two methods over their training seeds, setting by setting, from the
+   stored cells.
 
 The names below are importable from the package itself (loaded on first use: importing the package is cheap).
 """
