@@ -11,11 +11,11 @@ crowds are compared: every compared cell of a setting must share the fingerprint
 from __future__ import annotations
 
 import json
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from crowdbench.leaderboard.entries import seed_names
 from crowdbench.metrics import wilson
 
 MAIN_KEYS = ("I-high", "I-medium", "I-low", "II-n-10", "II-n-20", "II-n-30",
@@ -60,8 +60,7 @@ def family(root: Path, spec: str) -> list[str]:
     names = [s.strip() for s in spec.split(",") if s.strip()]
     stored = sorted(p.name for p in root.iterdir() if p.is_dir()) if root.is_dir() else []
     if "," not in spec:  # a label: the family; "LABEL," is the entry alone
-        seeds = sorted((int(m[1]), n) for n in stored if (m := re.fullmatch(rf"{re.escape(names[0])}-seed(\d+)", n)))
-        names += [n for _, n in seeds]
+        names += [n for _, n in seed_names(names[0], stored)]
     missing = [n for n in names if n not in stored]
     if not names or missing:
         what = ", ".join(missing) if missing else repr(spec)

@@ -64,6 +64,11 @@ STALE: dict[str, str] = {}
 """Shipped learned entries left off the board (label → why): their checkpoint was trained on another crowd."""
 
 
+def seed_names(name: str, names: list[str]) -> list[tuple[int, str]]:
+    """The other training seeds of ``name`` among ``names``: ``(k, "<name>-seed<k>")`` in seed order."""
+    return sorted((int(m[1]), n) for n in names if (m := re.fullmatch(rf"{re.escape(name)}-seed(\d+)", n)))
+
+
 OTHER_TIERS = ("velocities", "full")
 """Sensing tiers a main entry's checkpoint may also ship at: ``<name>-<tier>`` (and its seeds
 ``<name>-<tier>-seed<k>``) is the row ``<label>-<tier>`` — e.g. ``sarl-velocities``, SARL trained and run with
@@ -88,8 +93,7 @@ def shipped_entries(methods: tuple[Entry, ...] = METHODS) -> dict[str, Entry]:
             return
         out[e.slug] = e
         if e.group in ("main", "ablation") and ckpt:
-            seeds = sorted((int(m[1]), n) for n in names if (m := re.fullmatch(rf"{re.escape(ckpt)}-seed(\d+)", n)))
-            for k, name in seeds:
+            for k, name in seed_names(ckpt, names):
                 if trained_crowd(checkpoints.resolve(e.policy, name)) != current:
                     continue
                 seed_entry = Entry(f"{e.label}-seed{k}", e.policy, (("checkpoint", name),), f"seeds:{e.label}")

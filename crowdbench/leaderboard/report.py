@@ -150,7 +150,8 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
         return g.split(":", 1)[1] if ":" in g else (reference or "")
 
     seeds_of = {lb: [lb, *(x for x in board if groups.get(x, "main").startswith("seeds")
-                           and family(groups[x]) == lb)] for lb in board if groups.get(lb, "main") == "main"}
+                           and family(groups[x]) == lb)]
+                for lb in board if groups.get(lb, "main") in ("main", "ablation")}  # each head → its seeds
     extra = {t: [lb for lb in board if tier[lb] == t] for t in ("velocities", "full")}
     extra = {t: lbs for t, lbs in extra.items() if lbs}
     for lbs in extra.values():
@@ -216,9 +217,8 @@ def leaderboard_markdown(board: dict[str, list[dict[str, Any]]], groups: dict[st
                 out.append(f"| mean [spread], {len(labels)} seeds | " + " | ".join(stats) + " |")
             out.append("")
         if group in ("main", "ablation"):
-            families = {lb: [lb, *(x for x in board if groups.get(x, "main").startswith("seeds")
-                                   and family(groups[x]) == lb)] for lb in labels}
-            out += _over_seeds(board, families, planners, ablations=group == "ablation", budgets=budgets)
+            out += _over_seeds(board, {lb: seeds_of[lb] for lb in labels}, planners, ablations=group == "ablation",
+                               budgets=budgets)
         if group.startswith("sensing"):
             t = group.split(":", 1)[1]
             pairs = {lb[: -len(t) - 1]: lb for lb in labels if lb in seeds_of and lb.endswith(f"-{t}")}
