@@ -100,8 +100,9 @@ def compare(out: str) -> list[dict[str, Any]]:
     return rows
 
 
-def markdown(rows: list[dict[str, Any]]) -> str:
-    """The comparison as markdown: one table per entry, then the cells whose two evaluation ranges disagree."""
+def markdown(rows: list[dict[str, Any]], orders: str = "") -> str:
+    """The comparison as markdown: ``orders`` (a section, e.g. :func:`crowdbench.leaderboard.ordering.markdown`),
+    one table per entry, then the cells whose two evaluation ranges disagree."""
     def pct(r: tuple[float, float, float, int] | None) -> str:
         return "—" if r is None else f"{100 * r[0]:.1f} [{100 * r[1]:.0f}, {100 * r[2]:.0f}]"
 
@@ -110,6 +111,8 @@ def markdown(rows: list[dict[str, Any]]) -> str:
            "the paper's Tables I–III; Table III pooled over its three layouts as the paper reports it. *check*: the "
            "same cell on a disjoint seed range (out of sample). Nothing was tuned to these numbers. Regenerate with "
            "`crowdbench leaderboard paper`.", ""]
+    if orders:
+        out += [orders]
     by_entry: dict[str, list[dict[str, Any]]] = {}
     for r in rows:
         by_entry.setdefault(r["entry"], []).append(r)
@@ -133,7 +136,12 @@ def markdown(rows: list[dict[str, Any]]) -> str:
 
 
 def report(out: str, path: str | None = None) -> str:
-    """Write :func:`markdown` of :func:`compare` to ``path`` (default ``OUT/PAPER.md``) and return it."""
-    text = markdown(compare(out))
+    """Write :func:`markdown` of :func:`compare` and of the orderings (:mod:`crowdbench.leaderboard.ordering`) to
+    ``path`` (default ``OUT/PAPER.md``) and return it."""
+    from crowdbench.leaderboard import ordering
+
+    planners = frozenset(m.name for m in methods() if m.trainer is None)
+    orders = ordering.markdown(ordering.orderings(out, paper_rates()), planners)
+    text = markdown(compare(out), orders)
     write_text(path or os.path.join(out, "PAPER.md"), text)
     return text
