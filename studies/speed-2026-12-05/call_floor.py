@@ -59,14 +59,16 @@ def per_call(fn: Callable[[], object], calls: int, rounds: int, self_timed: bool
     return best
 
 
-def ours(n: int) -> Callable[[], float]:
-    """One ``orca_advance`` step of ``n`` lattice agents (the start restored every 20 steps); returns its seconds."""
+def ours(n: int, bind: Callable[..., Callable[..., object]] | None = None) -> Callable[[], float]:
+    """One ``orca_advance`` step of ``n`` lattice agents (the start restored every 20 steps); returns its seconds.
+    ``bind(*args)``: what to call instead of ``orca_advance`` with those arguments (e.g. its compiled entry point)."""
     a = ORCA_BENCH.batch_args(1, n)
     flt, ints, flags = np.stack([a[0], a[1], a[2], a[4], a[5]]), np.stack([a[3], a[8]]), np.stack([a[6], a[7]])
     start = bench_crowd(n, 1, "grid")
     vec = np.zeros((4, 1, n, 2))
     obst = build_obstacles([])
     speed = np.full((1, n), ORCA_BENCH.max_speed)
+    fn = bind(vec, flt, ints, flags, *obst, ORCA_BENCH.dt) if bind else orca_advance
     k = [0]
 
     def step() -> float:
@@ -76,7 +78,7 @@ def ours(n: int) -> Callable[[], float]:
         k[0] += 1
         vec[2] = preferred_velocity(vec[0], -start, speed, ORCA_BENCH.dt)
         t = time.perf_counter()
-        orca_advance(vec, flt, ints, flags, *obst, ORCA_BENCH.dt)
+        fn(vec, flt, ints, flags, *obst, ORCA_BENCH.dt)
         return time.perf_counter() - t
 
     return step
