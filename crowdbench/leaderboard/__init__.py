@@ -11,7 +11,8 @@
    :mod:`~crowdbench.leaderboard.paper` (the board beside the paper's numbers);
 7. :mod:`~crowdbench.leaderboard.verify` — stored cells re-evaluated and compared bit for bit.
 8. :mod:`~crowdbench.leaderboard.compare` — two methods over their training seeds, setting by setting, from the
-   stored cells.
+   stored cells; :mod:`~crowdbench.leaderboard.ordering` — every two methods with a paper row, the board's order
+   beside the paper's (the head of ``PAPER.md``).
 
 The names below are importable from the package itself (loaded on first use: importing the package is cheap).
 """

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from crowdbench.io import write_text
+from crowdbench.leaderboard import ordering
 from crowdbench.metrics import wilson
 from crowdbench.policies import methods
 
@@ -138,8 +139,6 @@ def markdown(rows: list[dict[str, Any]], orders: str = "") -> str:
 def report(out: str, path: str | None = None) -> str:
     """Write :func:`markdown` of :func:`compare` and of the orderings (:mod:`crowdbench.leaderboard.ordering`) to
     ``path`` (default ``OUT/PAPER.md``) and return it."""
-    from crowdbench.leaderboard import ordering
-
     planners = frozenset(m.name for m in methods() if m.trainer is None)
     orders = ordering.markdown(ordering.orderings(out, paper_rates()), planners)
     text = markdown(compare(out), orders)
