@@ -5,10 +5,7 @@ from __future__ import annotations
 import json
 
 from crowdbench.leaderboard import ordering, paper
-
-SETTINGS = ("I-high", "I-medium", "I-low", "II-n-10", "II-n-20", "II-n-30",
-            *(f"III-{lay}-{reg}" for lay in ("intersection", "split-flow", "random-wander")
-              for reg in ("high", "medium", "low")))
+from crowdbench.leaderboard.compare import MAIN_KEYS as SETTINGS
 
 
 def _store(root, entry, successes, scenario="crowd", n=500):

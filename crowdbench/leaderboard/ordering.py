@@ -9,10 +9,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from crowdbench.leaderboard.compare import compare, family
+from crowdbench.leaderboard.compare import MAIN_KEYS, POOLED, compare, family, summary
 
-PAPER_KEYS = ("I-high", "I-medium", "I-low", "II-n-10", "II-n-20", "II-n-30",
-              "III-pooled-high", "III-pooled-medium", "III-pooled-low")
+PAPER_KEYS = (*MAIN_KEYS[:6], *POOLED)
 """The board's settings in the order of the paper's triples (``Method.paper``: ``I``, ``II``, ``III``)."""
 
 
@@ -86,14 +85,12 @@ def orderings(out: str | Path, paper: dict[str, dict[str, tuple[int, int, int]]]
     order = sorted(fams, key=lambda m: -sum(means[m].get(k, 0.0) for k in common))
     pairs: dict[tuple[str, str], Pair] = {}
     for (a, b), res in results.items():
-        rows = res["rows"]
-        keys = tuple(r["key"] for r in rows)
-        diff = [round(100 * (r["mean_a"] - r["mean_b"]), 1) for r in rows]
-        flat = [p for r in rows for p in r["pairs"]]
+        keys = tuple(r["key"] for r in res["rows"])
+        s = summary(res, keys=PAPER_KEYS)
         pa, pb = _paper_values(paper[a]), _paper_values(paper[b])
         pdiff = [pa[k] - pb[k] for k in keys if k in pa and k in pb]
-        fwd = Pair(a, b, keys, (sum(d > 0 for d in diff), sum(d < 0 for d in diff)),
-                   (flat.count(1), flat.count(-1)), len(flat), (sum(d > 0 for d in pdiff), sum(d < 0 for d in pdiff)))
+        fwd = Pair(a, b, keys, (s["above"], s["below"]), (s["a_apart"], s["b_apart"]), s["pairs"],
+                   (sum(d > 0 for d in pdiff), sum(d < 0 for d in pdiff)))
         pairs[a, b] = fwd
         pairs[b, a] = Pair(b, a, keys, fwd.ours[::-1], fwd.apart[::-1], fwd.pairs, fwd.paper[::-1])
     paper_mean = {m: sum(_paper_values(paper[m]).get(k, 0) for k in common) / max(len(common), 1) for m in fams}
@@ -131,8 +128,7 @@ def markdown(result: dict[str, Any], planners: frozenset[str] = frozenset()) -> 
     out += ["", "Where the board's order differs from the paper's (majority of the settings; *apart*: seed pairs "
                 "with Wilson 95 % intervals that do not overlap, either way):", ""]
     for p in differ:
-        n = len(p.keys)
-        out.append(f"- **{p.a}** against **{p.b}**: board above in {p.ours[0]}, below in {p.ours[1]} of {n} "
+        out.append(f"- **{p.a}** against **{p.b}**: board above in {p.ours[0]}, below in {p.ours[1]} of {len(p.keys)} "
                    f"(apart {p.apart[0]} / {p.apart[1]} of {p.pairs} seed pairs); paper above in {p.paper[0]}, "
                    f"below in {p.paper[1]}.")
     if not differ:
