@@ -112,12 +112,17 @@ def rvo2_step(n: int) -> Callable[[], float]:
     return step
 
 
+def noop_args() -> list[np.ndarray]:
+    """``orca_advance``'s ten array arguments for one world of 20 agents without obstacles (``dt`` follows)."""
+    return ([np.zeros((4, 1, 20, 2)), np.zeros((5, 1, 20)), np.zeros((2, 1, 20), np.int64),
+             np.zeros((2, 1, 20), bool)] + list(build_obstacles([])))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=3)
     args = ap.parse_args()
-    arrs = ([np.zeros((4, 1, 20, 2)), np.zeros((5, 1, 20)), np.zeros((2, 1, 20), np.int64),
-             np.zeros((2, 1, 20), bool)] + list(build_obstacles([])))
+    arrs = noop_args()
     print(f"compiled no-op, 11 arguments   {per_call(lambda: _noop11(*arrs, 0.25), 200_000, args.rounds):6.2f} µs")
     print(f"compiled no-op, 1 array        {per_call(lambda: _noop1(arrs[0]), 200_000, args.rounds):6.2f} µs")
     print(f"21 allocations (compiled)      {per_call(lambda: _alloc21(20), 200_000, args.rounds):6.2f} µs")

@@ -17,12 +17,11 @@ import sys
 from pathlib import Path
 
 import numba
-import numpy as np
 
-from crowdbench.humans.orca_kernel import build_obstacles, orca_advance
+from crowdbench.humans.orca_kernel import orca_advance
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "speed-2026-12-05"))
-from call_floor import _noop11, ours, per_call  # noqa: E402
+from call_floor import _noop11, noop_args, ours, per_call  # noqa: E402
 
 
 def entry(kernel, *args):
@@ -37,8 +36,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--rounds", type=int, default=3)
     args = ap.parse_args()
-    arrs = ([np.zeros((4, 1, 20, 2)), np.zeros((5, 1, 20)), np.zeros((2, 1, 20), np.int64),
-             np.zeros((2, 1, 20), bool)] + list(build_obstacles([])))
+    arrs = noop_args()
     noop = entry(_noop11, *arrs, 0.25)
     for r in range(args.rounds):
         parts = [f"no-op {per_call(lambda: _noop11(*arrs, 0.25), 200_000, 3):.2f} · "
