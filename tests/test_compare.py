@@ -68,5 +68,22 @@ def test_the_command_prints_the_shipped_boards_comparison(capsys):
     assert main(["leaderboard", "compare", "h2int", "sarl"]) == 0
     out = capsys.readouterr().out
     assert "**h2int** (3 seeds: h2int, h2int-seed1, h2int-seed2) against **sarl** (3 seeds" in out
-    assert out.count("\n| I") == 18  # the 15 settings of Tables I–III and 3 pooled
+    keys = [line.split(" | ")[0][2:] for line in out.splitlines() if line.startswith("| I")]
+    assert keys[:18] == [*compare.MAIN_KEYS, *compare.POOLED]  # Tables I–III and the 3 pooled, then Table IV's
+    assert keys[18:] == sorted(keys[18:]) and "IV-univ-replay" in keys[18:]
     assert "Over the 15 settings of Tables I–III" in out
+
+
+def test_another_suites_cells_are_compared_and_counted(tmp_path):
+    """A board of another suite (Table V's settings only): every stored setting both methods have at every seed,
+    sorted, counted over them all."""
+    for entry, ks in {"m": (490, 300), "m-seed1": (495, 310), "other": (400, 305)}.items():
+        _store(tmp_path, entry, "V-orca", ks[0])
+        _store(tmp_path, entry, "V-social-force", ks[1])
+    _store(tmp_path, "m", "V-learned-crowd", 450)  # one seed of one method: left out
+    res = compare.compare(tmp_path, "m", "other", scenario="crowd")
+    assert [r["key"] for r in res["rows"]] == ["V-orca", "V-social-force"]
+    assert compare.summary(res)["settings"] == 0  # none of Tables I–III
+    assert compare.summary(res, keys=None)["settings"] == 2
+    text = compare.markdown(res)
+    assert "Over the 2 settings compared: m's mean above other's in 1, equal in 1, below in 0" in text

@@ -78,9 +78,18 @@ def _read(root: Path, entry: str, key: str) -> tuple[Rate, dict[str, Any]] | Non
     return Rate(round(r["success_rate"] * r["episodes"]), r["episodes"]), d.get("fingerprint") or {}
 
 
-def compare(out: str | Path, a: str, b: str, keys: tuple[str, ...] = (*MAIN_KEYS, *POOLED),
+def stored_keys(root: Path, entries: list[str]) -> tuple[str, ...]:
+    """The settings to compare in ``root`` (``OUT/cells``): Tables I–III and Table III pooled, then every other cell
+    stored for all of ``entries`` (e.g. Table IV's, or another suite's such as ``shift``'s Table V), sorted."""
+    stored = [{f.stem for f in (root / e).glob("*.json")} for e in entries]
+    common = set.intersection(*stored) if stored else set()
+    return (*MAIN_KEYS, *POOLED, *sorted(common - set(MAIN_KEYS)))
+
+
+def compare(out: str | Path, a: str, b: str, keys: tuple[str, ...] | None = None,
             scenario: str | None = None) -> dict[str, Any]:
-    """Methods ``a`` and ``b`` (:func:`family` specs) in the cells ``keys`` of the leaderboard folder ``out``.
+    """Methods ``a`` and ``b`` (:func:`family` specs) in the cells ``keys`` of the leaderboard folder ``out``
+    (default: :func:`stored_keys`).
 
     Returns ``{"a": [entries], "b": [entries], "rows": [...]}``, a row per setting both methods have at every seed:
     ``key``, ``a`` and ``b`` (the :class:`Rate` of each seed), ``mean_a``, ``mean_b`` (mean success over seeds, in
@@ -90,6 +99,7 @@ def compare(out: str | Path, a: str, b: str, keys: tuple[str, ...] = (*MAIN_KEYS
 
     root = Path(out) / "cells"
     fa, fb = family(root, a), family(root, b)
+    keys = stored_keys(root, [*fa, *fb]) if keys is None else keys
     scenario = scenario or scenario_digest()
     rows = []
     for key in keys:
@@ -118,10 +128,11 @@ def compare(out: str | Path, a: str, b: str, keys: tuple[str, ...] = (*MAIN_KEYS
     return {"a": fa, "b": fb, "rows": rows}
 
 
-def summary(result: dict[str, Any], keys: tuple[str, ...] = MAIN_KEYS) -> dict[str, int]:
-    """Counts over the settings ``keys`` (default: the 15 of Tables I–III): where ``a``'s mean is above, equal to or
-    below ``b``'s (to 0.1 point), and the seed pairs with intervals apart either way, of how many."""
-    rows = [r for r in result["rows"] if r["key"] in keys]
+def summary(result: dict[str, Any], keys: tuple[str, ...] | None = MAIN_KEYS) -> dict[str, int]:
+    """Counts over the settings ``keys`` (default: the 15 of Tables I–III; ``None``: every compared setting): where
+    ``a``'s mean is above, equal to or below ``b``'s (to 0.1 point), and the seed pairs with intervals apart either
+    way, of how many."""
+    rows = [r for r in result["rows"] if keys is None or r["key"] in keys]
     diff = [round(100 * (r["mean_a"] - r["mean_b"]), 1) for r in rows]
     pairs = [p for r in rows for p in r["pairs"]]
     return {"settings": len(rows), "above": sum(d > 0 for d in diff), "equal": sum(d == 0 for d in diff),
@@ -143,9 +154,11 @@ def markdown(result: dict[str, Any]) -> str:
         seeds_b = " · ".join(f"{100 * x.rate:.1f}" for x in r["b"])
         out.append(f"| {r['key']} | {100 * r['mean_a']:.1f} ({seeds_a}) | {100 * r['mean_b']:.1f} ({seeds_b}) | "
                    f"{100 * (r['mean_a'] - r['mean_b']):+.1f} | {r['pairs'].count(1)} / {r['pairs'].count(-1)} |")
-    s = summary(result)
+    s, where = summary(result), "of Tables I–III"
+    if not s["settings"]:  # another suite's board (e.g. Table V): every setting compared
+        s, where = summary(result, keys=None), "compared"
     if s["settings"]:
-        out += ["", f"Over the {s['settings']} settings of Tables I–III: {a}'s mean above {b}'s in {s['above']}, equal "
+        out += ["", f"Over the {s['settings']} settings {where}: {a}'s mean above {b}'s in {s['above']}, equal "
                     f"in {s['equal']}, below in {s['below']}; seed pairs apart: {a} ahead in {s['a_apart']} (in "
                     f"{s['a_apart_settings']} settings), {b} ahead in {s['b_apart']} (in {s['b_apart_settings']} "
                     f"settings), of {s['pairs']}."]
