@@ -81,8 +81,7 @@ def _read(root: Path, entry: str, key: str) -> tuple[Rate, dict[str, Any]] | Non
 def stored_keys(root: Path, entries: list[str]) -> tuple[str, ...]:
     """The settings to compare in ``root`` (``OUT/cells``): Tables I–III and Table III pooled, then every other cell
     stored for all of ``entries`` (e.g. Table IV's, or another suite's such as ``shift``'s Table V), sorted."""
-    stored = [{f.stem for f in (root / e).glob("*.json")} for e in entries]
-    common = set.intersection(*stored) if stored else set()
+    common = set.intersection(*({f.stem for f in (root / e).glob("*.json")} for e in entries))
     return (*MAIN_KEYS, *POOLED, *sorted(common - set(MAIN_KEYS)))
 
 
